@@ -1,0 +1,58 @@
+//! The in-memory LiDAR frame: both returns of one revolution in the sensor
+//! frame, in file order (predictions are written in the same order).
+
+/// One LiDAR return as stored in a 3DRef frame.
+///
+/// Bulk storage is `f32` (as the files are); geometry converts to `f64`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Point {
+    /// Position in the sensor frame, metres.
+    pub xyz: [f32; 3],
+    /// Return intensity as reported by the sensor (0-255 for the QT64).
+    pub intensity: f32,
+    /// Laser ring, 0 at the bottom.
+    pub ring: u16,
+    /// Return index: 1 = first/strongest, 2 = last.
+    pub ret: u8,
+    /// 3DRef label id (0 when the file carries no labels).
+    pub label: u8,
+}
+
+impl Point {
+    /// Position as an `f64` point.
+    #[inline]
+    pub fn position(&self) -> nalgebra::Point3<f64> {
+        nalgebra::Point3::new(self.xyz[0] as f64, self.xyz[1] as f64, self.xyz[2] as f64)
+    }
+
+    /// Distance from the sensor origin.
+    #[inline]
+    pub fn range(&self) -> f64 {
+        self.position().coords.norm()
+    }
+}
+
+/// One frame: a revolution of the sensor with both returns.
+#[derive(Debug, Clone, Default)]
+pub struct Frame {
+    /// File stem, e.g. `1689496219.652560`; predictions are named after it.
+    pub name: String,
+    /// Timestamp in seconds (the stem parsed as a number).
+    pub stamp: f64,
+    /// All points in input order.
+    pub points: Vec<Point>,
+    /// Whether the source carried ground-truth labels.
+    pub has_labels: bool,
+}
+
+impl Frame {
+    /// Ground-truth labels in input order (all 0 when the frame has none).
+    pub fn labels(&self) -> Vec<u8> {
+        self.points.iter().map(|p| p.label).collect()
+    }
+
+    /// Number of second-return points.
+    pub fn second_returns(&self) -> usize {
+        self.points.iter().filter(|p| p.ret == 2).count()
+    }
+}

@@ -1,0 +1,151 @@
+//! Plane fitting: total least squares (PCA) and RANSAC with a least-squares
+//! refit and inlier reselection (the PCL `SACSegmentation` semantics the
+//! paper's thresholds were tuned with).
+
+use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+
+use super::Plane;
+use crate::rng::SplitMix64;
+
+/// Total-least-squares plane through `points` (the smallest principal axis of
+/// their scatter). Returns the plane and the eigenvalues of the covariance,
+/// ascending; `None` for fewer than 3 points or a degenerate (collinear) set.
+pub fn fit_plane<I>(points: I) -> Option<(Plane, [f64; 3])>
+where
+    I: IntoIterator<Item = Point3<f64>>,
+    I::IntoIter: Clone,
+{
+    let it = points.into_iter();
+    let mut n = 0usize;
+    let mut sum = Vector3::zeros();
+    for p in it.clone() {
+        sum += p.coords;
+        n += 1;
+    }
+    if n < 3 {
+        return None;
+    }
+    let mean = sum / n as f64;
+    let mut cov = Matrix3::zeros();
+    for p in it {
+        let r = p.coords - mean;
+        cov += r * r.transpose();
+    }
+    cov /= n as f64;
+    let eig = SymmetricEigen::new(cov);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let values = [
+        eig.eigenvalues[order[0]],
+        eig.eigenvalues[order[1]],
+        eig.eigenvalues[order[2]],
+    ];
+    // Collinear or coincident points do not define a plane.
+    if !(values[1] > 1e-12) {
+        return None;
+    }
+    let normal = eig.eigenvectors.column(order[0]).into_owned();
+    let plane = Plane::from_point_normal(&Point3::from(mean), &normal)?;
+    Some((plane, values))
+}
+
+/// RANSAC parameters (PCL names in brackets).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RansacParams {
+    /// Inlier distance threshold in metres [distance_threshold].
+    pub distance: f64,
+    /// Maximum number of iterations [max_iterations].
+    pub max_iterations: usize,
+    /// Desired probability of drawing an outlier-free sample [probability];
+    /// iterations stop early once it is reached.
+    pub probability: f64,
+    /// Refit the best model by least squares on its inliers and reselect the
+    /// inliers with the refined plane [optimize_coefficients].
+    pub refit: bool,
+}
+
+impl Default for RansacParams {
+    fn default() -> Self {
+        Self {
+            distance: 0.07,
+            max_iterations: 400,
+            probability: 0.9,
+            refit: true,
+        }
+    }
+}
+
+/// A fitted plane with the indices (into the input slice) of its inliers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneFit {
+    /// The plane.
+    pub plane: Plane,
+    /// Inlier indices into the input slice, ascending.
+    pub inliers: Vec<u32>,
+}
+
+/// RANSAC plane fit over `points`. Deterministic for a given `rng` state.
+/// Returns `None` when fewer than 3 points are given or no sample defines a
+/// plane.
+pub fn ransac_plane(
+    points: &[Point3<f64>],
+    params: &RansacParams,
+    rng: &mut SplitMix64,
+) -> Option<PlaneFit> {
+    let n = points.len();
+    if n < 3 {
+        return None;
+    }
+    let mut best: Option<(Plane, usize)> = None;
+    let mut needed = params.max_iterations as f64;
+    let mut iter = 0usize;
+    while (iter as f64) < needed.min(params.max_iterations as f64) {
+        iter += 1;
+        let (a, b, c) = (rng.below(n), rng.below(n), rng.below(n));
+        if a == b || b == c || a == c {
+            continue;
+        }
+        let normal = (points[b] - points[a]).cross(&(points[c] - points[a]));
+        let Some(plane) = Plane::from_point_normal(&points[a], &normal) else {
+            continue;
+        };
+        let count = count_inliers(points, &plane, params.distance);
+        if best.is_none_or(|(_, c)| count > c) {
+            best = Some((plane, count));
+            // Adaptive iteration count (as PCL): k = log(1-p) / log(1-w^3).
+            let w = count as f64 / n as f64;
+            let denom = (1.0 - w.powi(3)).max(1e-12).ln();
+            if denom < 0.0 {
+                needed = ((1.0 - params.probability).ln() / denom).ceil().max(1.0);
+            }
+        }
+    }
+    let (mut plane, _) = best?;
+    if params.refit {
+        let inliers = select_inliers(points, &plane, params.distance);
+        if let Some((refined, _)) = fit_plane(inliers.iter().map(|&i| points[i as usize])) {
+            plane = refined;
+        }
+    }
+    let inliers = select_inliers(points, &plane, params.distance);
+    Some(PlaneFit { plane, inliers })
+}
+
+fn count_inliers(points: &[Point3<f64>], plane: &Plane, distance: f64) -> usize {
+    points
+        .iter()
+        .filter(|p| plane.signed_distance(p).abs() <= distance)
+        .count()
+}
+
+/// Indices of the points within `distance` of `plane`.
+pub fn select_inliers(points: &[Point3<f64>], plane: &Plane, distance: f64) -> Vec<u32> {
+    points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| plane.signed_distance(p).abs() <= distance)
+        .map(|(i, _)| i as u32)
+        .collect()
+}

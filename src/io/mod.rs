@@ -1,0 +1,18 @@
+//! Input and output at the edge of the library: 3DRef PLY frames, TUM pose
+//! files, prediction labels, and matching frames to poses by timestamp.
+//!
+//! Every reader returns a [`crate::Error`] naming the file and what is wrong;
+//! every writer writes to a temporary file and renames it into place, so a
+//! failed run never leaves a half-written output.
+
+pub mod atomic;
+pub mod frames;
+pub mod labels;
+pub mod ply;
+pub mod tum;
+
+pub use atomic::write_atomic;
+pub use frames::{list_frames, match_poses, FrameEntry};
+pub use labels::{read_labels, write_labels};
+pub use ply::{read_frame, write_frame, PlyEncoding};
+pub use tum::{read_tum, write_tum, StampedPose};

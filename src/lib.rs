@@ -1,0 +1,40 @@
+//! # specular
+//!
+//! Reflection-aware plane SLAM on dual-return LiDAR.
+//!
+//! Glass and mirrors break LiDAR: a beam reports the glass, the object behind
+//! it, or a ghost reflected into a place where nothing is. specular finds the
+//! reflective planes from dual returns, fuses them into a plane map, classifies
+//! every point (Normal, reflective surface, Reflection, Obstacle behind glass)
+//! and mirrors reflections back to their true place.
+//!
+//! The crate is organised as the method is:
+//!
+//! | module | role |
+//! |---|---|
+//! | [`geometry`] | planes, SE(3), convex polygons in a plane chart, plane fitting |
+//! | [`sensor`] | sensor models (rings, columns) and the organized dual-return scan |
+//! | [`io`] | 3DRef PLY frames, TUM poses, prediction labels, frame/pose matching |
+//! | [`reflect`] | reflective-plane detection in one scan (`ReflectiveDetector`) |
+//! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
+//! | [`eval`] | the paper's metrics: precision, recall, IoU, removal rate |
+//! | [`pipeline`] | wiring: runs a method over a sequence of frames |
+//! | [`config`] | the TOML configuration, the single source of defaults |
+//!
+//! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
+//! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
+//! `T_world_sensor`. Geometry is `f64`; bulk point storage is `f32`.
+
+pub mod classify;
+pub mod cloud;
+pub mod config;
+pub mod error;
+pub mod eval;
+pub mod geometry;
+pub mod io;
+pub mod pipeline;
+pub mod rng;
+pub mod reflect;
+pub mod sensor;
+
+pub use error::{Error, Result};
