@@ -1,0 +1,163 @@
+//! Which reflective plane a beam passes through, and where.
+//!
+//! Two boundary models: the convex hull of the plane's evidence in its chart
+//! (the paper), or Zhao 2020's "glass window", a ring × column box of the
+//! organized scan around the plane's inliers.
+
+use nalgebra::{Point3, Vector3};
+
+use crate::reflect::BoundedPlane;
+use crate::sensor::OrganizedScan;
+
+/// A ring × column box of the organized scan; the column range may wrap
+/// around the azimuth seam.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Window {
+    /// Lowest ring inside.
+    pub ring_lo: usize,
+    /// Highest ring inside.
+    pub ring_hi: usize,
+    /// First column inside.
+    pub col_start: usize,
+    /// Number of columns inside, counted from `col_start` with wrap-around.
+    pub col_len: usize,
+}
+
+impl Window {
+    /// The smallest box holding every cell of `points` (indices into the
+    /// scan's frame), grown by `ring_pad` rings; the column range is the
+    /// shortest circular arc covering the points' columns. A window narrower
+    /// than `min_cols` columns is widened to the full revolution (Zhao 2020:
+    /// a narrow window is not trusted to bound the glass).
+    pub fn around(scan: &OrganizedScan, points: &[u32], ring_pad: usize, min_cols: usize) -> Option<Self> {
+        let cols = scan.columns();
+        let mut used = vec![false; cols];
+        let (mut lo, mut hi) = (usize::MAX, 0usize);
+        for &i in points {
+            let (r, c) = scan.ring_column(scan.cell_of(i as usize));
+            used[c] = true;
+            lo = lo.min(r);
+            hi = hi.max(r);
+        }
+        if lo == usize::MAX {
+            return None;
+        }
+        // The largest run of unused columns (circular) is outside the window.
+        let (mut best_gap, mut best_end) = (0usize, 0usize);
+        let mut run = 0usize;
+        for k in 0..2 * cols {
+            if used[k % cols] {
+                run = 0;
+            } else {
+                run += 1;
+                if run > best_gap && run <= cols {
+                    best_gap = run;
+                    best_end = k % cols;
+                }
+            }
+        }
+        let (col_start, col_len) = if best_gap == 0 {
+            (0, cols)
+        } else {
+            ((best_end + 1) % cols, cols - best_gap)
+        };
+        let (col_start, col_len) = if col_len < min_cols { (0, cols) } else { (col_start, col_len) };
+        Some(Self {
+            ring_lo: lo.saturating_sub(ring_pad),
+            ring_hi: (hi + ring_pad).min(scan.rings() - 1),
+            col_start,
+            col_len,
+        })
+    }
+
+    /// Whether a (ring, column) cell is inside.
+    #[inline]
+    pub fn contains(&self, ring: usize, col: usize, columns: usize) -> bool {
+        ring >= self.ring_lo
+            && ring <= self.ring_hi
+            && (col + columns - self.col_start) % columns < self.col_len
+    }
+}
+
+/// The reflective planes of one frame with their boundary model, answering
+/// "which plane does this beam cross first, and at what range".
+#[derive(Debug, Clone)]
+pub struct BeamPlanes<'a> {
+    planes: &'a [BoundedPlane],
+    windows: Option<Vec<Window>>,
+    margin: f64,
+}
+
+impl<'a> BeamPlanes<'a> {
+    /// Hull boundaries grown by `margin` metres.
+    pub fn hulls(planes: &'a [BoundedPlane], margin: f64) -> Self {
+        Self {
+            planes,
+            windows: None,
+            margin,
+        }
+    }
+
+    /// Window boundaries, one per plane.
+    pub fn windows(planes: &'a [BoundedPlane], windows: Vec<Window>) -> Self {
+        Self {
+            planes,
+            windows: Some(windows),
+            margin: 0.0,
+        }
+    }
+
+    /// The planes.
+    pub fn planes(&self) -> &'a [BoundedPlane] {
+        self.planes
+    }
+
+    /// The nearest plane crossed by the beam from the sensor origin towards
+    /// `p` inside its boundary: `(plane index, range of the crossing)`.
+    /// `cell` is the point's (ring, column) for window boundaries.
+    pub fn first_hit(&self, p: &Point3<f64>, cell: Option<(usize, usize, usize)>) -> Option<(usize, f64)> {
+        let range = p.coords.norm();
+        if !(range > 0.0) {
+            return None;
+        }
+        let dir: Vector3<f64> = p.coords / range;
+        let origin = Point3::origin();
+        let mut best: Option<(usize, f64)> = None;
+        for (k, bp) in self.planes.iter().enumerate() {
+            let Some(t) = bp.plane.ray_intersection(&origin, &dir) else {
+                continue;
+            };
+            if best.is_some_and(|(_, bt)| bt <= t) {
+                continue;
+            }
+            let inside = match (&self.windows, cell) {
+                (Some(w), Some((ring, col, columns))) => w[k].contains(ring, col, columns),
+                (Some(_), None) => false,
+                (None, _) => bp.bounds(&(origin + dir * t), self.margin),
+            };
+            if inside {
+                best = Some((k, t));
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn window_contains_wraps_around_the_seam() {
+        let w = Window {
+            ring_lo: 2,
+            ring_hi: 4,
+            col_start: 590,
+            col_len: 20,
+        };
+        assert!(w.contains(3, 595, 600));
+        assert!(w.contains(3, 5, 600));
+        assert!(!w.contains(3, 20, 600));
+        assert!(!w.contains(5, 0, 600));
+    }
+}

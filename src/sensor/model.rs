@@ -1,0 +1,210 @@
+//! Spinning-LiDAR sensor descriptions.
+
+use std::path::Path;
+
+use nalgebra::{Point3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// Which two returns a dual-return sensor reports per beam.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReturnMode {
+    /// First and last return (Hesai QT64).
+    FirstLast,
+    /// Strongest and last return (Velodyne HDL-32E).
+    StrongestLast,
+    /// A single return per beam (no dual-return information).
+    Single,
+}
+
+/// A spinning LiDAR: ring elevations (ring 0 at the bottom), columns per
+/// revolution, range limits and return mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorModel {
+    /// Identifier, e.g. `pandar_qt64`.
+    pub name: String,
+    /// Human-readable description.
+    #[serde(default)]
+    pub description: String,
+    /// Columns (azimuth steps) per revolution.
+    pub columns: usize,
+    /// Revolutions per second.
+    pub rate_hz: f64,
+    /// Minimum range, metres.
+    pub min_range: f64,
+    /// Maximum range, metres.
+    pub max_range: f64,
+    /// Return mode.
+    pub return_mode: ReturnMode,
+    /// Two echoes closer than this along a beam cannot be separated, metres.
+    pub range_resolution: f64,
+    /// Elevation of each ring in degrees, ring 0 (bottom) first.
+    pub elevations_deg: Vec<f64>,
+}
+
+/// Built-in sensor descriptions, embedded so a fresh clone needs no files.
+const BUILTIN: &[(&str, &str)] = &[
+    (
+        "pandar_qt64",
+        include_str!("../../configs/sensors/pandar_qt64.toml"),
+    ),
+    (
+        "velodyne_hdl32e",
+        include_str!("../../configs/sensors/velodyne_hdl32e.toml"),
+    ),
+];
+
+impl SensorModel {
+    /// Names of the built-in sensors.
+    pub fn builtin_names() -> Vec<&'static str> {
+        BUILTIN.iter().map(|(n, _)| *n).collect()
+    }
+
+    /// A built-in sensor by name, or a sensor TOML file by path.
+    pub fn resolve(name_or_path: &str) -> Result<Self> {
+        if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
+            return Self::from_toml(text, Path::new(name_or_path));
+        }
+        let path = Path::new(name_or_path);
+        if path.exists() {
+            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            return Self::from_toml(&text, path);
+        }
+        Err(Error::Config(format!(
+            "unknown sensor '{name_or_path}': not a built-in ({}) nor a file",
+            Self::builtin_names().join(", ")
+        )))
+    }
+
+    /// Parse and validate a sensor description (`origin` names it in errors).
+    pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
+        let model: Self =
+            toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        model.validate(origin)?;
+        Ok(model)
+    }
+
+    fn validate(&self, origin: &Path) -> Result<()> {
+        let bad = |m: String| Err(Error::format(origin, m));
+        if self.elevations_deg.is_empty() || self.elevations_deg.len() > u16::MAX as usize {
+            return bad("elevations_deg must list 1..65535 rings".into());
+        }
+        if self.elevations_deg.windows(2).any(|w| !(w[1] > w[0])) {
+            return bad("elevations_deg must increase from ring 0 (bottom) upwards".into());
+        }
+        if self.columns < 4 {
+            return bad(format!("columns must be at least 4, got {}", self.columns));
+        }
+        if !(self.min_range >= 0.0 && self.max_range > self.min_range) {
+            return bad("need 0 <= min_range < max_range".into());
+        }
+        if !(self.rate_hz > 0.0) || !(self.range_resolution >= 0.0) {
+            return bad("rate_hz must be positive and range_resolution non-negative".into());
+        }
+        Ok(())
+    }
+
+    /// Number of rings.
+    pub fn rings(&self) -> usize {
+        self.elevations_deg.len()
+    }
+
+    /// Azimuth step per column, degrees.
+    pub fn column_step_deg(&self) -> f64 {
+        360.0 / self.columns as f64
+    }
+
+    /// Column of a sensor-frame direction: `round((180 + atan2(y, x)) / step)`
+    /// wrapped to `0..columns` (the seam is one column, never two).
+    #[inline]
+    pub fn column_of(&self, x: f64, y: f64) -> usize {
+        let deg = 180.0 + y.atan2(x).to_degrees();
+        let c = (deg / self.column_step_deg()).round() as i64;
+        c.rem_euclid(self.columns as i64) as usize
+    }
+
+    /// Azimuth (degrees, atan2 convention) of the centre of a column.
+    pub fn column_azimuth_deg(&self, column: usize) -> f64 {
+        column as f64 * self.column_step_deg() - 180.0
+    }
+
+    /// The ring whose elevation is nearest to the direction of `p`, or `None`
+    /// when `p` lies outside the vertical field of view by more than half a
+    /// ring spacing.
+    pub fn ring_of(&self, p: &Point3<f64>) -> Option<usize> {
+        let horizontal = (p.x * p.x + p.y * p.y).sqrt();
+        let elev = p.z.atan2(horizontal).to_degrees();
+        let e = &self.elevations_deg;
+        let i = e.partition_point(|&x| x < elev);
+        let candidates = [i.checked_sub(1), (i < e.len()).then_some(i)];
+        let best = candidates
+            .into_iter()
+            .flatten()
+            .min_by(|&a, &b| (e[a] - elev).abs().total_cmp(&(e[b] - elev).abs()))?;
+        let spacing = if e.len() > 1 {
+            let lo = best.saturating_sub(1);
+            let hi = (best + 1).min(e.len() - 1);
+            (e[hi] - e[lo]) / (hi - lo) as f64
+        } else {
+            1.0
+        };
+        ((e[best] - elev).abs() <= 0.5 * spacing.abs()).then_some(best)
+    }
+
+    /// Unit beam direction of a (ring, column) cell in the sensor frame.
+    pub fn beam_direction(&self, ring: usize, column: usize) -> Vector3<f64> {
+        let el = self.elevations_deg[ring].to_radians();
+        let az = self.column_azimuth_deg(column).to_radians();
+        Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_parse_and_have_the_documented_shape() {
+        let qt = SensorModel::resolve("pandar_qt64").unwrap();
+        assert_eq!(qt.rings(), 64);
+        assert_eq!(qt.columns, 600);
+        assert!((qt.elevations_deg[0] + 52.79).abs() < 1e-9);
+        let hdl = SensorModel::resolve("velodyne_hdl32e").unwrap();
+        assert_eq!(hdl.rings(), 32);
+        assert_eq!(hdl.return_mode, ReturnMode::StrongestLast);
+    }
+
+    #[test]
+    fn seam_is_one_column() {
+        let qt = SensorModel::resolve("pandar_qt64").unwrap();
+        // atan2 = +180 and -180 deg are the same physical column.
+        assert_eq!(qt.column_of(-1.0, 1e-12), qt.column_of(-1.0, -1e-12));
+        assert_eq!(qt.column_of(-1.0, 0.0), 0);
+        assert!((0..3600).all(|k| {
+            let a = (k as f64 * 0.1).to_radians();
+            qt.column_of(a.cos(), a.sin()) < 600
+        }));
+    }
+
+    #[test]
+    fn ring_lookup_inverts_beam_direction() {
+        let qt = SensorModel::resolve("pandar_qt64").unwrap();
+        for ring in 0..qt.rings() {
+            for col in [0, 1, 299, 599] {
+                let d = qt.beam_direction(ring, col) * 7.0;
+                assert_eq!(qt.ring_of(&Point3::from(d)), Some(ring));
+                assert_eq!(qt.column_of(d.x, d.y), col);
+            }
+        }
+        assert_eq!(qt.ring_of(&Point3::new(0.0, 0.0, 5.0)), None);
+    }
+
+    #[test]
+    fn unknown_sensor_is_a_clear_error() {
+        let e = SensorModel::resolve("nope").unwrap_err().to_string();
+        assert!(e.contains("unknown sensor 'nope'"), "{e}");
+    }
+}

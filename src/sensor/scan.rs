@@ -1,0 +1,202 @@
+//! The organized scan: a frame's points on the sensor's ring × column grid,
+//! with both returns of each beam paired (in the sensor frame).
+
+use crate::cloud::Frame;
+use crate::sensor::SensorModel;
+use crate::{Error, Result};
+
+/// Marker for "no point" in a cell.
+const NONE: u32 = u32::MAX;
+
+/// Both returns of every beam, indexed by (ring, column).
+///
+/// Return 1 (first/strongest) and return 2 (last) are kept per cell; a cell
+/// whose return 2 was not stored (3DRef stores it only where it differs) has a
+/// single return that is both first and last. When two return-1 points fall in
+/// the same cell (rare, at bin edges) the first in file order keeps the cell
+/// and the other is counted in [`collisions`](Self::collisions).
+#[derive(Debug, Clone)]
+pub struct OrganizedScan {
+    rings: usize,
+    columns: usize,
+    first: Vec<u32>,
+    second: Vec<u32>,
+    cell_of_point: Vec<u32>,
+    collisions: usize,
+}
+
+impl OrganizedScan {
+    /// Organize `frame` on `sensor`'s grid. Errors (naming the frame) when a
+    /// point's ring is outside the sensor's rings.
+    pub fn build(frame: &Frame, sensor: &SensorModel) -> Result<Self> {
+        let (rings, columns) = (sensor.rings(), sensor.columns);
+        let cells = rings * columns;
+        let mut first = vec![NONE; cells];
+        let mut second = vec![NONE; cells];
+        let mut cell_of_point = vec![NONE; frame.points.len()];
+        let mut collisions = 0;
+        // Return 1 first, so return 2 can always find its partner cell.
+        for pass in [1u8, 2u8] {
+            for (i, p) in frame.points.iter().enumerate() {
+                if p.ret != pass {
+                    continue;
+                }
+                let ring = p.ring as usize;
+                if ring >= rings {
+                    return Err(Error::Input(format!(
+                        "frame {}: point {i} has ring {ring} but sensor '{}' has {rings} rings",
+                        frame.name, sensor.name
+                    )));
+                }
+                let col = sensor.column_of(p.xyz[0] as f64, p.xyz[1] as f64);
+                let cell = ring * columns + col;
+                cell_of_point[i] = cell as u32;
+                let slot = if pass == 1 { &mut first } else { &mut second };
+                if slot[cell] == NONE {
+                    slot[cell] = i as u32;
+                } else {
+                    collisions += 1;
+                }
+            }
+        }
+        Ok(Self {
+            rings,
+            columns,
+            first,
+            second,
+            cell_of_point,
+            collisions,
+        })
+    }
+
+    /// Number of rings (rows).
+    pub fn rings(&self) -> usize {
+        self.rings
+    }
+
+    /// Number of columns.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// Points that lost their cell to an earlier point with the same return.
+    pub fn collisions(&self) -> usize {
+        self.collisions
+    }
+
+    /// Flat cell index of (ring, column); the column wraps around the seam.
+    #[inline]
+    pub fn cell(&self, ring: usize, column: isize) -> usize {
+        ring * self.columns + column.rem_euclid(self.columns as isize) as usize
+    }
+
+    /// (ring, column) of a flat cell index.
+    #[inline]
+    pub fn ring_column(&self, cell: usize) -> (usize, usize) {
+        (cell / self.columns, cell % self.columns)
+    }
+
+    /// Return-1 point index of a cell.
+    #[inline]
+    pub fn first(&self, cell: usize) -> Option<usize> {
+        let i = self.first[cell];
+        (i != NONE).then_some(i as usize)
+    }
+
+    /// Return-2 point index of a cell (only where it was stored).
+    #[inline]
+    pub fn second(&self, cell: usize) -> Option<usize> {
+        let i = self.second[cell];
+        (i != NONE).then_some(i as usize)
+    }
+
+    /// The last return of a cell: return 2 when stored, else return 1.
+    #[inline]
+    pub fn last(&self, cell: usize) -> Option<usize> {
+        self.second(cell).or_else(|| self.first(cell))
+    }
+
+    /// The cell a point was placed in.
+    #[inline]
+    pub fn cell_of(&self, point: usize) -> usize {
+        self.cell_of_point[point] as usize
+    }
+
+    /// The other return of the same beam, when the cell holds two returns and
+    /// `point` is one of them.
+    #[inline]
+    pub fn partner(&self, point: usize) -> Option<usize> {
+        let cell = self.cell_of(point);
+        let (f, s) = (self.first[cell], self.second[cell]);
+        if f == NONE || s == NONE {
+            return None;
+        }
+        if f as usize == point {
+            Some(s as usize)
+        } else if s as usize == point {
+            Some(f as usize)
+        } else {
+            None
+        }
+    }
+
+    /// Cells holding both a return 1 and a return 2.
+    pub fn dual_cells(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        self.first
+            .iter()
+            .zip(&self.second)
+            .enumerate()
+            .filter(|(_, (f, s))| **f != NONE && **s != NONE)
+            .map(|(c, (f, s))| (c, *f as usize, *s as usize))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::Point;
+
+    fn point(x: f32, y: f32, z: f32, ring: u16, ret: u8) -> Point {
+        Point {
+            xyz: [x, y, z],
+            intensity: 10.0,
+            ring,
+            ret,
+            label: 1,
+        }
+    }
+
+    #[test]
+    fn pairs_returns_by_ring_and_column_across_the_seam() {
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let frame = Frame {
+            name: "t".into(),
+            stamp: 0.0,
+            points: vec![
+                point(-5.0, 1e-6, 0.0, 32, 1),  // azimuth +180 deg
+                point(-9.0, -1e-6, 0.0, 32, 2), // azimuth -180 deg: same beam
+                point(3.0, 0.0, 0.0, 32, 1),
+            ],
+            has_labels: true,
+        };
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        assert_eq!(scan.partner(0), Some(1));
+        assert_eq!(scan.partner(1), Some(0));
+        assert_eq!(scan.partner(2), None);
+        assert_eq!(scan.dual_cells().count(), 1);
+        assert_eq!(scan.last(scan.cell_of(0)), Some(1));
+        assert_eq!(scan.last(scan.cell_of(2)), Some(2));
+    }
+
+    #[test]
+    fn ring_out_of_range_is_an_error() {
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let frame = Frame {
+            name: "bad".into(),
+            points: vec![point(1.0, 0.0, 0.0, 64, 1)],
+            ..Default::default()
+        };
+        let e = OrganizedScan::build(&frame, &sensor).unwrap_err().to_string();
+        assert!(e.contains("ring 64") && e.contains("64 rings"), "{e}");
+    }
+}
