@@ -1,0 +1,65 @@
+//! `specular eval`: score predictions against labelled frames.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use specular::classify::Class;
+use specular::eval::Confusion;
+use specular::io;
+
+/// Arguments of `eval`.
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Directory of labelled 3DRef frames.
+    #[arg(long)]
+    pub frames: PathBuf,
+    /// Directory of `<stem>.label` predictions (or a run directory holding
+    /// `predictions/`).
+    #[arg(long)]
+    pub pred: PathBuf,
+    /// Also write the metrics as JSON to this file.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// Run `eval`.
+pub fn run(args: EvalArgs) -> Result<()> {
+    let pred_dir = if args.pred.join("predictions").is_dir() {
+        args.pred.join("predictions")
+    } else {
+        args.pred.clone()
+    };
+    let entries = io::list_frames(&args.frames)?;
+    let mut conf = Confusion::default();
+    for e in &entries {
+        let frame = io::read_frame(&e.path)?;
+        if !frame.has_labels {
+            bail!("{}: frame has no 'label' property, nothing to score against", e.path.display());
+        }
+        let pred_path = pred_dir.join(format!("{}.label", e.name));
+        if !pred_path.exists() {
+            bail!("{}: missing prediction for frame {}", pred_path.display(), e.name);
+        }
+        let pred = io::read_labels(&pred_path)?;
+        if pred.len() != frame.points.len() {
+            bail!(
+                "{}: {} predictions for {} points in {}",
+                pred_path.display(),
+                pred.len(),
+                frame.points.len(),
+                e.path.display()
+            );
+        }
+        let classes: Vec<Class> = pred.iter().map(|&id| Class::from_id(id)).collect();
+        conf.add(&frame.labels(), &classes);
+    }
+    let metrics = conf.metrics();
+    println!("{} frames scored", entries.len());
+    print!("{}", metrics.table());
+    if let Some(path) = args.json {
+        let json = serde_json::to_string_pretty(&metrics)?;
+        io::write_atomic(&path, |w| std::io::Write::write_all(w, json.as_bytes()))?;
+    }
+    Ok(())
+}

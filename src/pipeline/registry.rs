@@ -1,0 +1,29 @@
+//! Name → implementation: the one place where configuration picks the
+//! implementations of the seams.
+
+use crate::classify::{Classifier, SingleScanClassifier};
+use crate::config::Config;
+use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
+use crate::sensor::SensorModel;
+
+/// The reflective detector named in `[detector]`.
+pub fn detector(config: &Config, sensor: &SensorModel) -> Box<dyn ReflectiveDetector> {
+    Box::new(CandidateRansacDetector::new(config.detector, sensor.clone()))
+}
+
+/// The single-scan classifier configured in `[single_scan]`.
+pub fn single_scan_classifier(config: &Config) -> Box<dyn Classifier> {
+    Box::new(SingleScanClassifier::new(config.single_scan))
+}
+
+/// A per-frame seed derived from the run seed and the frame's name, so a
+/// frame's result does not depend on which other frames are processed.
+pub fn frame_seed(seed: u64, name: &str) -> u64 {
+    // FNV-1a over the name, mixed with the seed.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325 ^ seed;
+    for b in name.bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}

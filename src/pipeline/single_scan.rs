@@ -1,0 +1,83 @@
+//! The single-scan pipeline: every frame on its own (pair, detect, classify).
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::registry::{detector, frame_seed, single_scan_classifier};
+use super::{FrameOutput, RunOutput, Sequence, StageTimings};
+use crate::classify::FrameInput;
+use crate::config::Config;
+use crate::reflect::CandidateSource;
+use crate::sensor::{OrganizedScan, SensorModel};
+use crate::{Error, Result};
+
+/// Check that a frame can be processed by the configured detector.
+pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) -> Result<()> {
+    let frame = &sequence.frames[index];
+    if frame.points.is_empty() {
+        return Err(Error::Input(format!(
+            "{}: frame has no points",
+            sequence.path(index).display()
+        )));
+    }
+    if config.detector.name == CandidateSource::DualReturn && frame.second_returns() == 0 {
+        return Err(Error::Input(format!(
+            "{}: frame has no second return; the dual-return detector needs dual-return data \
+             (use [detector] name = \"intensity-peak\" for single-return scans)",
+            sequence.path(index).display()
+        )));
+    }
+    Ok(())
+}
+
+/// Run the single-scan method over every frame (in parallel; the result does
+/// not depend on the thread count).
+pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput> {
+    let wall = Instant::now();
+    let sensor = SensorModel::resolve(&config.sensor)?;
+    let detector = detector(config, &sensor);
+    let classifier = single_scan_classifier(config);
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
+    let results: Vec<(FrameOutput, StageTimings)> = sequence
+        .frames
+        .par_iter()
+        .map(|frame| {
+            let mut t = StageTimings::default();
+            let start = Instant::now();
+            let scan = OrganizedScan::build(frame, &sensor)?;
+            t.add("pair", start.elapsed());
+            let start = Instant::now();
+            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
+            t.add("detect", start.elapsed());
+            let start = Instant::now();
+            let classes = classifier.classify(&FrameInput {
+                frame,
+                scan: &scan,
+                sensor: &sensor,
+                detection: &detection,
+            });
+            t.add("classify", start.elapsed());
+            t.frames = 1;
+            Ok((
+                FrameOutput {
+                    name: frame.name.clone(),
+                    classes,
+                    planes: detection.planes.len(),
+                    candidates: detection.candidates.len(),
+                },
+                t,
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let mut timings = StageTimings::default();
+    let mut frames = Vec::with_capacity(results.len());
+    for (out, t) in results {
+        timings.merge(&t);
+        frames.push(out);
+    }
+    timings.wall = wall.elapsed();
+    Ok(RunOutput { frames, timings })
+}
