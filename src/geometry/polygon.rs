@@ -10,10 +10,18 @@ use std::cmp::Ordering;
 
 use nalgebra::{Point2, Vector2};
 
-/// Relative tolerance of the hull's turn test: a vertex is kept only when
-/// the cross product of its edges exceeds `HULL_EPS · extent²`, which removes
-/// collinear and duplicate vertices produced by round-off.
-const HULL_EPS: f64 = 1e-14;
+/// Relative tolerance of the hull's turn test: a vertex is kept only when it
+/// lies more than `HULL_EPS · (extent + magnitude)` to the left of the chord
+/// joining its neighbours (`extent`: bounding-box size, `magnitude`: largest
+/// absolute coordinate). This removes collinear and duplicate vertices whose
+/// coordinates carry round-off (≈ 500 ulps of the coordinates) while any
+/// dropped point stays within the `1e-9` tolerance of `contains` for
+/// coordinates up to ~1e3.
+const HULL_EPS: f64 = 1e-13;
+
+/// Largest mitre length of [`ConvexPolygon::offset`], as a multiple of the
+/// margin (SVG's default): sharper corners are squared off instead.
+pub const MITER_LIMIT: f64 = 4.0;
 
 /// Distance tolerance of [`ConvexPolygon::contains`].
 const CONTAINS_EPS: f64 = 1e-9;
@@ -108,15 +116,20 @@ impl ConvexPolygon {
             hi = hi.sup(&p.coords);
         }
         let extent = (hi - lo).amax();
-        if !(extent > 0.0) || !extent.is_finite() {
+        if !extent.is_finite() || extent <= 0.0 {
             return Self::default();
         }
-        let eps = HULL_EPS * extent * extent;
+        let magnitude = lo.abs().sup(&hi.abs()).max();
+        let tol = HULL_EPS * (extent + magnitude);
+        // `a` is dropped when it is not strictly left of the chord `o → p`.
+        let keep = |o: &Point2<f64>, a: &Point2<f64>, p: &Point2<f64>| {
+            cross(o, a, p) > tol * (p - o).norm()
+        };
 
         let mut h: Vec<Point2<f64>> = Vec::with_capacity(pts.len() + 1);
         // Lower chain, left to right.
         for p in &pts {
-            while h.len() >= 2 && cross(&h[h.len() - 2], &h[h.len() - 1], p) <= eps {
+            while h.len() >= 2 && !keep(&h[h.len() - 2], &h[h.len() - 1], p) {
                 h.pop();
             }
             h.push(*p);
@@ -124,7 +137,7 @@ impl ConvexPolygon {
         // Upper chain, right to left.
         let lower_len = h.len() + 1;
         for p in pts.iter().rev().skip(1) {
-            while h.len() >= lower_len && cross(&h[h.len() - 2], &h[h.len() - 1], p) <= eps {
+            while h.len() >= lower_len && !keep(&h[h.len() - 2], &h[h.len() - 1], p) {
                 h.pop();
             }
             h.push(*p);
@@ -280,8 +293,10 @@ impl ConvexPolygon {
     /// every edge normal; shrinking past the centre gives an empty polygon.
     ///
     /// Growing intersects adjacent offset edge lines (a mitred offset); at a
-    /// needle-sharp vertex whose mitre would exceed `1e3 · margin` the corner
-    /// is bevelled instead (still containing the original). Shrinking clips
+    /// sharp vertex whose mitre would exceed [`MITER_LIMIT`]` · margin` the
+    /// corner is squared off at distance `margin` from the vertex instead, so
+    /// thin slivers do not grow long spikes. Either way the result contains
+    /// every point within `margin` of the original polygon. Shrinking clips
     /// the polygon by every inward-shifted edge half-plane. A non-finite
     /// margin gives an empty polygon.
     pub fn offset(&self, margin: f64) -> Self {
@@ -311,13 +326,23 @@ impl ConvexPolygon {
             let (Some(n1), Some(n2)) = (normals[(i + k - 1) % k], normals[i]) else {
                 continue;
             };
-            let denom = 1.0 + n1.dot(&n2);
-            // Mitre length is margin · sqrt(2 / denom); bevel beyond 1e3×.
-            if denom > 2e-6 {
-                pts.push(v + (n1 + n2) * (margin / denom));
+            // cos γ, γ the half-angle between the normals; the mitre point
+            // is v + margin · b / cos γ with b the unit bisector.
+            let cos_g = (0.5 * (1.0 + n1.dot(&n2))).max(0.0).sqrt();
+            if cos_g * MITER_LIMIT >= 1.0 {
+                pts.push(v + (n1 + n2) * (margin / (2.0 * cos_g * cos_g)));
             } else {
-                pts.push(v + n1 * margin);
-                pts.push(v + n2 * margin);
+                // Square cap at distance `margin` along the bisector: the
+                // points where it meets the two offset lines.
+                let b = (n1 + n2)
+                    .try_normalize(1e-12)
+                    .unwrap_or_else(|| Vector2::new(-n1.y, n1.x));
+                let side = Vector2::new(-b.y, b.x);
+                let sin_g = (1.0 - cos_g * cos_g).max(0.0).sqrt();
+                let half = margin * (1.0 - cos_g) / sin_g.max(f64::MIN_POSITIVE);
+                let half = half.min(margin);
+                pts.push(v + b * margin + side * half);
+                pts.push(v + b * margin - side * half);
             }
         }
         Self::hull(&pts)
@@ -383,9 +408,12 @@ mod tests {
         let needle = ConvexPolygon::hull(&[p(0.0, 0.0), p(1e6, 0.0), p(1e6, 1e-3)]);
         assert!(!needle.is_empty());
         let g = needle.offset(1.0);
-        assert!(g.vertices().iter().all(|v| v.coords.norm() < 1e7));
+        // Square caps: nothing further than √2 · margin from the needle.
+        for v in g.vertices() {
+            assert!(needle.signed_distance(v) <= 2f64.sqrt() + 1e-9);
+        }
         for v in needle.vertices() {
-            assert!(g.contains(v));
+            assert!(g.signed_distance(v) <= -1.0 + 1e-9);
         }
     }
 }
