@@ -448,36 +448,42 @@ impl std::fmt::Display for Loc {
 }
 
 /// Store a non-coordinate value into `p`, validating it.
-#[inline]
+#[inline(always)]
 fn store_int(p: &mut Point, slot: Slot, v: f64, loc: Loc) -> std::result::Result<(), String> {
+    // Saturating casts: the value is valid iff it survives the round trip
+    // (NaN, negative, fractional and too large values do not).
     match slot {
         Slot::Ring => {
-            if v.fract() == 0.0 && (0.0..=65535.0).contains(&v) {
-                p.ring = v as u16;
-                Ok(())
-            } else {
-                Err(format!(
-                    "{loc}: ring must be an integer in 0..=65535, got {v}"
-                ))
+            let r = v as u16;
+            if r as f64 == v {
+                p.ring = r;
+                return Ok(());
             }
         }
         Slot::Return => {
             if v == 1.0 || v == 2.0 {
                 p.ret = v as u8;
-                Ok(())
-            } else {
-                Err(format!("{loc}: return must be 1 or 2, got {v}"))
+                return Ok(());
             }
         }
         Slot::Label => {
-            if v.fract() == 0.0 && (0.0..=6.0).contains(&v) {
-                p.label = v as u8;
-                Ok(())
-            } else {
-                Err(format!("{loc}: label must be an integer in 0..=6, got {v}"))
+            let l = v as u8;
+            if l as f64 == v && l <= 6 {
+                p.label = l;
+                return Ok(());
             }
         }
-        _ => Ok(()),
+        _ => return Ok(()),
+    }
+    Err(bad_int(slot, v, loc))
+}
+
+#[cold]
+fn bad_int(slot: Slot, v: f64, loc: Loc) -> String {
+    match slot {
+        Slot::Ring => format!("{loc}: ring must be an integer in 0..=65535, got {v}"),
+        Slot::Return => format!("{loc}: return must be 1 or 2, got {v}"),
+        _ => format!("{loc}: label must be an integer in 0..=6, got {v}"),
     }
 }
 
@@ -619,13 +625,60 @@ fn skip_blank(b: &[u8], mut p: usize) -> usize {
     p
 }
 
-/// End of the token starting at `p`.
+/// End of the token starting at `p`: the first separator byte at or after
+/// `p`, or the end. Scans eight bytes at a time for a byte below `0x21`
+/// (every separator is), then checks byte by byte.
 #[inline(always)]
 fn token_end(b: &[u8], mut p: usize) -> usize {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    while let Some(chunk) = b.get(p..p + 8) {
+        let mut a = [0u8; 8];
+        a.copy_from_slice(chunk);
+        let x = u64::from_le_bytes(a);
+        // High bit set in the lowest byte below 0x21 (exact for the lowest).
+        let m = x.wrapping_sub(0x21 * LO) & !x & HI;
+        if m != 0 {
+            p += (m.trailing_zeros() / 8) as usize;
+            break;
+        }
+        p += 8;
+    }
     while p < b.len() && !is_ws(b[p]) {
         p += 1;
     }
     p
+}
+
+/// Fast path for an unsigned integer field written as `digits[.0*]`
+/// (`36`, `36.0`). `None` for any other form (the caller falls back to the
+/// general parser).
+#[inline(always)]
+fn parse_uint_fast(b: &[u8], mut p: usize) -> Option<(f64, usize)> {
+    let len = b.len();
+    let start = p;
+    let mut n: u32 = 0;
+    while p < len && p - start < 9 {
+        let d = b[p].wrapping_sub(b'0');
+        if d > 9 {
+            break;
+        }
+        n = n * 10 + d as u32;
+        p += 1;
+    }
+    if p == start {
+        return None;
+    }
+    if p < len && b[p] == b'.' {
+        p += 1;
+        while p < len && b[p] == b'0' {
+            p += 1;
+        }
+    }
+    if p < len && !is_ws(b[p]) {
+        return None;
+    }
+    Some((n as f64, p))
 }
 
 /// Skip to the start of the next line (past `\n`), or to the end.
@@ -729,6 +782,11 @@ fn parse_fast(b: &[u8], mut p: usize) -> Option<(f64, usize)> {
     } else {
         if m > (1u64 << 53) {
             return None;
+        }
+        // "14.0" -> 14: avoid a division for trailing fractional zeros.
+        while exp < 0 && m % 10 == 0 {
+            m /= 10;
+            exp += 1;
         }
         if (0..=22).contains(&exp) {
             m as f64 * POW10[exp as usize]
@@ -857,10 +915,9 @@ fn parse_ascii(
                 pos = token_end(b, pos);
                 continue;
             }
-            let fast = parse_fast(b, pos);
             match slot {
                 Slot::X | Slot::Y | Slot::Z | Slot::Intensity => {
-                    let v32 = match fast {
+                    let v32 = match parse_fast(b, pos) {
                         Some((v, end)) if !f32_halfway(v) => {
                             pos = end;
                             v as f32
@@ -882,7 +939,7 @@ fn parse_ascii(
                     }
                 }
                 _ => {
-                    let v = match fast {
+                    let v = match parse_uint_fast(b, pos).or_else(|| parse_fast(b, pos)) {
                         Some((v, end)) => {
                             pos = end;
                             v
