@@ -784,7 +784,7 @@ fn parse_fast(b: &[u8], mut p: usize) -> Option<(f64, usize)> {
             return None;
         }
         // "14.0" -> 14: avoid a division for trailing fractional zeros.
-        while exp < 0 && m % 10 == 0 {
+        while exp < 0 && m.is_multiple_of(10) {
             m /= 10;
             exp += 1;
         }
