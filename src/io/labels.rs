@@ -1,16 +1,35 @@
 //! Prediction files: `predictions/<stem>.label`, one little-endian `u32` per
 //! input point, in input order (the SemanticKITTI convention).
 
+use std::io::Write;
 use std::path::Path;
 
-use crate::Result;
+use crate::{Error, Result};
 
 /// Write labels as little-endian `u32` (atomically).
 pub fn write_labels(path: &Path, labels: &[u8]) -> Result<()> {
-    todo!("{} {}", path.display(), labels.len())
+    let bytes: Vec<u8> = labels
+        .iter()
+        .flat_map(|&l| (l as u32).to_le_bytes())
+        .collect();
+    crate::io::write_atomic(path, |w| w.write_all(&bytes))
 }
 
-/// Read a `.label` file.
+/// Read a `.label` file. Errors (naming the file) when its length is not a
+/// multiple of four bytes.
 pub fn read_labels(path: &Path) -> Result<Vec<u32>> {
-    todo!("{}", path.display())
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if bytes.len() % 4 != 0 {
+        return Err(Error::format(
+            path,
+            format!(
+                "length {} bytes is not a multiple of 4 (one little-endian u32 per point)",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
 }

@@ -12,7 +12,7 @@ pub mod ply;
 pub mod tum;
 
 pub use atomic::write_atomic;
-pub use frames::{list_frames, match_poses, FrameEntry};
+pub use frames::{list_frames, match_poses, parse_stamp, FrameEntry};
 pub use labels::{read_labels, write_labels};
-pub use ply::{read_frame, write_frame, PlyEncoding};
-pub use tum::{read_tum, write_tum, StampedPose};
+pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
+pub use tum::{parse_tum, read_tum, write_tum, StampedPose};
