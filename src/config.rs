@@ -111,7 +111,8 @@ impl Config {
 
     /// Parse a configuration (`origin` names it in errors) and validate it.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let config: Self = toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        let config: Self =
+            toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
         config.validate().map_err(|m| Error::format(origin, m))?;
         Ok(config)
     }
@@ -126,7 +127,10 @@ impl Config {
         let positive = [
             ("detector.dual_gap", d.dual_gap),
             ("detector.ransac.distance", d.ransac.distance),
-            ("single_scan.decision.glass_distance", self.single_scan.decision.glass_distance),
+            (
+                "single_scan.decision.glass_distance",
+                self.single_scan.decision.glass_distance,
+            ),
             ("input.pose_tolerance", self.input.pose_tolerance),
         ];
         for (name, v) in positive {
@@ -141,7 +145,9 @@ impl Config {
             ));
         }
         if d.ransac.max_iterations == 0 || d.max_planes == 0 {
-            return Err("detector.ransac.max_iterations and detector.max_planes must be at least 1".into());
+            return Err(
+                "detector.ransac.max_iterations and detector.max_planes must be at least 1".into(),
+            );
         }
         let dec = &self.single_scan.decision;
         if dec.behind_distance < dec.glass_distance {
@@ -171,7 +177,9 @@ mod tests {
 
     #[test]
     fn unknown_keys_and_bad_values_are_errors() {
-        let e = Config::from_toml("sensorr = 1", Path::new("c.toml")).unwrap_err().to_string();
+        let e = Config::from_toml("sensorr = 1", Path::new("c.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("c.toml") && e.contains("sensorr"), "{e}");
         let e = Config::from_toml("[detector]\ndual_gap = -1.0", Path::new("c.toml"))
             .unwrap_err()

@@ -33,8 +33,8 @@ pub mod eval;
 pub mod geometry;
 pub mod io;
 pub mod pipeline;
-pub mod rng;
 pub mod reflect;
+pub mod rng;
 pub mod sensor;
 
 pub use error::{Error, Result};

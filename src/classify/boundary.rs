@@ -29,7 +29,12 @@ impl Window {
     /// shortest circular arc covering the points' columns. A window narrower
     /// than `min_cols` columns is widened to the full revolution (Zhao 2020:
     /// a narrow window is not trusted to bound the glass).
-    pub fn around(scan: &OrganizedScan, points: &[u32], ring_pad: usize, min_cols: usize) -> Option<Self> {
+    pub fn around(
+        scan: &OrganizedScan,
+        points: &[u32],
+        ring_pad: usize,
+        min_cols: usize,
+    ) -> Option<Self> {
         let cols = scan.columns();
         let mut used = vec![false; cols];
         let (mut lo, mut hi) = (usize::MAX, 0usize);
@@ -61,7 +66,11 @@ impl Window {
         } else {
             ((best_end + 1) % cols, cols - best_gap)
         };
-        let (col_start, col_len) = if col_len < min_cols { (0, cols) } else { (col_start, col_len) };
+        let (col_start, col_len) = if col_len < min_cols {
+            (0, cols)
+        } else {
+            (col_start, col_len)
+        };
         Some(Self {
             ring_lo: lo.saturating_sub(ring_pad),
             ring_hi: (hi + ring_pad).min(scan.rings() - 1),
@@ -115,7 +124,11 @@ impl<'a> BeamPlanes<'a> {
     /// The nearest plane crossed by the beam from the sensor origin towards
     /// `p` inside its boundary: `(plane index, range of the crossing)`.
     /// `cell` is the point's (ring, column) for window boundaries.
-    pub fn first_hit(&self, p: &Point3<f64>, cell: Option<(usize, usize, usize)>) -> Option<(usize, f64)> {
+    pub fn first_hit(
+        &self,
+        p: &Point3<f64>,
+        cell: Option<(usize, usize, usize)>,
+    ) -> Option<(usize, f64)> {
         let range = p.coords.norm();
         if !(range > 0.0) {
             return None;

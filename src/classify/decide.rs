@@ -186,7 +186,10 @@ pub fn decide(
         let p = frame.points[i].position();
         let depth = -bp.plane.signed_distance(&p);
         let tests_apply = params.obstacle_tests_on_all_returns || is_last(i);
-        if tests_apply && params.depth_test && depth > max_indoor[plane as usize] + params.depth_margin {
+        if tests_apply
+            && params.depth_test
+            && depth > max_indoor[plane as usize] + params.depth_margin
+        {
             classes[i] = Class::Obstacle;
             continue;
         }
@@ -232,7 +235,8 @@ pub fn decide(
             if same_plane
                 && classes[far] == Class::Obstacle
                 && classes[near] != Class::Obstacle
-                && (frame.points[near].position() - frame.points[far].position()).norm() > params.dual_gap
+                && (frame.points[near].position() - frame.points[far].position()).norm()
+                    > params.dual_gap
             {
                 classes[near] = Class::Reflection;
             }

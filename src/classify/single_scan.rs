@@ -98,6 +98,13 @@ impl Classifier for SingleScanClassifier {
                 BeamPlanes::windows(&planes, windows)
             }
         };
-        decide(input.frame, input.scan, input.sensor, &beams, &p.decision, None)
+        decide(
+            input.frame,
+            input.scan,
+            input.sensor,
+            &beams,
+            &p.decision,
+            None,
+        )
     }
 }

@@ -57,7 +57,11 @@ pub fn run(args: DetectArgs) -> Result<()> {
 }
 
 /// Load a sequence and run the configured method on it.
-pub(crate) fn detect(frames: &Path, poses: Option<&Path>, config: &Config) -> Result<(Sequence, RunOutput)> {
+pub(crate) fn detect(
+    frames: &Path,
+    poses: Option<&Path>,
+    config: &Config,
+) -> Result<(Sequence, RunOutput)> {
     let mut timings = StageTimings::default();
     let wall = std::time::Instant::now();
     let sequence = Sequence::load(frames, poses, config.input.pose_tolerance, &mut timings)?;
@@ -75,7 +79,12 @@ pub(crate) fn detect(frames: &Path, poses: Option<&Path>, config: &Config) -> Re
 }
 
 /// Write predictions, metrics (when labelled) and the configuration used.
-pub(crate) fn write_outputs(out: &Path, config: &Config, sequence: &Sequence, output: &RunOutput) -> Result<()> {
+pub(crate) fn write_outputs(
+    out: &Path,
+    config: &Config,
+    sequence: &Sequence,
+    output: &RunOutput,
+) -> Result<()> {
     let pred_dir = out.join("predictions");
     for f in &output.frames {
         let ids: Vec<u8> = f.classes.iter().map(|c| c.id()).collect();
@@ -86,7 +95,9 @@ pub(crate) fn write_outputs(out: &Path, config: &Config, sequence: &Sequence, ou
     })?;
     if let Some(conf) = output.confusion(sequence) {
         let json = serde_json::to_string_pretty(&conf.metrics()).context("serialising metrics")?;
-        io::write_atomic(&out.join("metrics.json"), |w| std::io::Write::write_all(w, json.as_bytes()))?;
+        io::write_atomic(&out.join("metrics.json"), |w| {
+            std::io::Write::write_all(w, json.as_bytes())
+        })?;
     }
     Ok(())
 }

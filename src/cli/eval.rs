@@ -35,11 +35,18 @@ pub fn run(args: EvalArgs) -> Result<()> {
     for e in &entries {
         let frame = io::read_frame(&e.path)?;
         if !frame.has_labels {
-            bail!("{}: frame has no 'label' property, nothing to score against", e.path.display());
+            bail!(
+                "{}: frame has no 'label' property, nothing to score against",
+                e.path.display()
+            );
         }
         let pred_path = pred_dir.join(format!("{}.label", e.name));
         if !pred_path.exists() {
-            bail!("{}: missing prediction for frame {}", pred_path.display(), e.name);
+            bail!(
+                "{}: missing prediction for frame {}",
+                pred_path.display(),
+                e.name
+            );
         }
         let pred = io::read_labels(&pred_path)?;
         if pred.len() != frame.points.len() {

@@ -5,7 +5,12 @@ use serde::{Deserialize, Serialize};
 use crate::classify::Class;
 
 /// The four scored classes, in table order.
-pub const EVAL_CLASSES: [Class; 4] = [Class::Normal, Class::Glass, Class::Reflection, Class::Obstacle];
+pub const EVAL_CLASSES: [Class; 4] = [
+    Class::Normal,
+    Class::Glass,
+    Class::Reflection,
+    Class::Obstacle,
+];
 
 /// Index of a scored class in [`EVAL_CLASSES`].
 fn class_index(c: Class) -> Option<usize> {
@@ -64,7 +69,13 @@ impl Confusion {
     /// The metrics of these counts.
     pub fn metrics(&self) -> Metrics {
         let c = &self.counts;
-        let pct = |num: u64, den: u64| if den == 0 { f64::NAN } else { 100.0 * num as f64 / den as f64 };
+        let pct = |num: u64, den: u64| {
+            if den == 0 {
+                f64::NAN
+            } else {
+                100.0 * num as f64 / den as f64
+            }
+        };
         let per_class: Vec<ClassScores> = (0..4)
             .map(|k| {
                 let tp = c[k][k + 1];
@@ -82,7 +93,11 @@ impl Confusion {
             .collect();
         let total = self.total();
         let correct: u64 = (0..4).map(|k| c[k][k + 1]).sum();
-        let ious: Vec<f64> = per_class.iter().map(|s| s.iou).filter(|v| v.is_finite()).collect();
+        let ious: Vec<f64> = per_class
+            .iter()
+            .map(|s| s.iou)
+            .filter(|v| v.is_finite())
+            .collect();
         let (n, g, r) = (0, 1, 2);
         let (pn, pg, pr, po) = (1, 2, 3, 4);
         // Kept and not called reflection: predicted N, G or O.
@@ -96,7 +111,11 @@ impl Confusion {
         Metrics {
             classes: per_class,
             accuracy: pct(correct, total),
-            miou: if ious.is_empty() { f64::NAN } else { ious.iter().sum::<f64>() / ious.len() as f64 },
+            miou: if ious.is_empty() {
+                f64::NAN
+            } else {
+                ious.iter().sum::<f64>() / ious.len() as f64
+            },
             non_reflection_precision: pct(kept - kept_reflections, kept),
             indoor_precision: pct(indoor_true, indoor),
             reflection_removal: pct(removed, reflections),

@@ -8,7 +8,10 @@ use crate::sensor::SensorModel;
 
 /// The reflective detector named in `[detector]`.
 pub fn detector(config: &Config, sensor: &SensorModel) -> Box<dyn ReflectiveDetector> {
-    Box::new(CandidateRansacDetector::new(config.detector, sensor.clone()))
+    Box::new(CandidateRansacDetector::new(
+        config.detector,
+        sensor.clone(),
+    ))
 }
 
 /// The single-scan classifier configured in `[single_scan]`.

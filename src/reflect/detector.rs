@@ -146,7 +146,14 @@ impl ReflectiveDetector for CandidateRansacDetector {
         let mut candidates = Vec::new();
         if p.name != CandidateSource::IntensityPeak {
             let dual = dual_return_candidates(frame, scan, p.dual_gap);
-            self.fit_planes(frame, &dual, p.min_candidates, p.min_inliers, &mut rng, &mut planes);
+            self.fit_planes(
+                frame,
+                &dual,
+                p.min_candidates,
+                p.min_inliers,
+                &mut rng,
+                &mut planes,
+            );
             candidates = dual;
         }
         if p.name != CandidateSource::DualReturn {

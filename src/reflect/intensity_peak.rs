@@ -148,7 +148,11 @@ mod tests {
                 let p = dir * (2.0 / dir.x);
                 let dist_deg = (sensor.column_azimuth_deg(col) - 0.0).abs()
                     + (sensor.elevations_deg[ring] - 0.42).abs();
-                let intensity = if peak { (200.0 - 40.0 * dist_deg).max(10.0) } else { 10.0 };
+                let intensity = if peak {
+                    (200.0 - 40.0 * dist_deg).max(10.0)
+                } else {
+                    10.0
+                };
                 points.push(Point {
                     xyz: [p.x as f32, p.y as f32, p.z as f32],
                     intensity: intensity as f32,

@@ -81,8 +81,7 @@ impl SensorModel {
 
     /// Parse and validate a sensor description (`origin` names it in errors).
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let model: Self =
-            toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        let model: Self = toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
         model.validate(origin)?;
         Ok(model)
     }

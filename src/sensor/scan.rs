@@ -196,7 +196,9 @@ mod tests {
             points: vec![point(1.0, 0.0, 0.0, 64, 1)],
             ..Default::default()
         };
-        let e = OrganizedScan::build(&frame, &sensor).unwrap_err().to_string();
+        let e = OrganizedScan::build(&frame, &sensor)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("ring 64") && e.contains("64 rings"), "{e}");
     }
 }
