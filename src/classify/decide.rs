@@ -3,9 +3,10 @@
 //! bounded reflective planes).
 //!
 //! 1. Beam test: a point whose beam crosses no reflective plane inside its
-//!    boundary is Normal. Otherwise, by its signed distance `s` to the first
-//!    plane crossed: `|s| <= glass_distance` is Glass, `s > 0` is Normal (in
-//!    front), and `s < 0` is behind the plane: a Reflection or an Obstacle.
+//!    boundary is Normal. Otherwise, by its range `r` against the range `t`
+//!    at which the beam crosses the first plane: `|r - t| <= glass_distance`
+//!    is Glass, `r < t` is Normal (in front), and `r > t + behind_distance`
+//!    is behind the plane: a Reflection or an Obstacle.
 //! 2. Behind-plane points are split by evidence, obstacle tests first:
 //!    - depth: a reflection appears as deep behind the plane as its real
 //!      object stands in front, so a point deeper than every point seen in
@@ -34,10 +35,12 @@ use crate::sensor::{OrganizedScan, SensorModel};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DecisionParams {
-    /// Points within this distance of the plane are on the surface, m.
+    /// Points within this range of the plane's crossing along their beam are
+    /// on the surface, m.
     pub glass_distance: f64,
-    /// Points farther than this behind the plane are behind it, m (between
-    /// `glass_distance` and this they are ambiguous).
+    /// Points farther than this behind the crossing (along the beam) are
+    /// behind the plane, m (between `glass_distance` and this they are
+    /// ambiguous).
     pub behind_distance: f64,
     /// Use the depth test.
     pub depth_test: bool,
@@ -48,6 +51,10 @@ pub struct DecisionParams {
     pub free_space_test: bool,
     /// A return this much farther than the mirrored point proves free space, m.
     pub free_space_margin: f64,
+    /// Cells around the mirrored point's cell that must all show free space
+    /// (0: the cell alone, as Zhao 2020; 1: the 3 × 3 block, robust to the
+    /// ring and column quantisation of the mirrored direction).
+    pub free_space_neighbourhood: usize,
     /// Which behind-plane points the free-space and depth tests apply to:
     /// only last returns (Zhao 2020) or every behind-plane point.
     pub obstacle_tests_on_all_returns: bool,
@@ -70,12 +77,13 @@ pub struct DecisionParams {
 impl Default for DecisionParams {
     fn default() -> Self {
         Self {
-            glass_distance: 0.05,
+            glass_distance: 0.1,
             behind_distance: 0.1,
             depth_test: true,
             depth_margin: 0.0,
             free_space_test: true,
             free_space_margin: 0.1,
+            free_space_neighbourhood: 0,
             obstacle_tests_on_all_returns: false,
             support_test: false,
             support_range: 0.1,
@@ -131,13 +139,13 @@ pub fn decide(
             let (ring, col) = scan.ring_column(scan.cell_of(i));
             match planes.first_hit(&p, Some((ring, col, columns))) {
                 None => Beam::Clear,
-                Some((k, _)) => {
-                    let s = bounded[k].plane.signed_distance(&p);
+                Some((k, t)) => {
+                    let s = p.coords.norm() - t;
                     if s.abs() <= params.glass_distance {
                         Beam::Surface
-                    } else if s > 0.0 {
+                    } else if s < 0.0 {
                         Beam::Front
-                    } else if s >= -params.behind_distance {
+                    } else if s <= params.behind_distance {
                         Beam::Band
                     } else {
                         Beam::Behind { plane: k as u16 }
@@ -195,7 +203,7 @@ pub fn decide(
         }
         let mirrored = bp.plane.mirror(&p);
         let along_beam = if params.free_space_test || params.support_test {
-            returns_along(scan, sensor, frame, &mirrored)
+            returns_along(scan, sensor, frame, &mirrored, params.free_space_neighbourhood)
         } else {
             None
         };
@@ -209,10 +217,8 @@ pub fn decide(
             }
         }
         if params.support_test {
-            let on_beam = along_beam.is_some_and(|(near, far)| {
-                (near - mirrored_range).abs() <= params.support_range
-                    || (far - mirrored_range).abs() <= params.support_range
-            });
+            let on_beam = along_beam
+                .is_some_and(|(closest, _)| (closest - mirrored_range).abs() <= params.support_range);
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {
@@ -252,22 +258,44 @@ pub fn decide(
     classes
 }
 
-/// Ranges of the nearest and farthest return in the beam (cell) towards `q`
-/// (sensor frame), or `None` when `q` is outside the field of view or the
-/// cell is empty.
+/// Along the beams towards `q` (sensor frame): the range of the return
+/// nearest to `q`'s range, and the smallest "farthest return" over the cells
+/// within `neighbourhood` rings and columns of `q`'s cell (free space at `q`
+/// is proven only if every one of them passes it). `None` when `q` is outside
+/// the field of view or its own cell is empty.
 fn returns_along(
     scan: &OrganizedScan,
     sensor: &SensorModel,
     frame: &Frame,
     q: &Point3<f64>,
+    neighbourhood: usize,
 ) -> Option<(f64, f64)> {
     let ring = sensor.ring_of(q)?;
-    let col = sensor.column_of(q.x, q.y);
-    let cell = scan.cell(ring, col as isize);
-    let first = scan.first(cell)?;
-    let r1 = frame.points[first].range();
-    let r2 = scan.second(cell).map_or(r1, |j| frame.points[j].range());
-    Some((r1.min(r2), r1.max(r2)))
+    let col = sensor.column_of(q.x, q.y) as isize;
+    scan.first(scan.cell(ring, col))?;
+    let rq = q.coords.norm();
+    let k = neighbourhood as isize;
+    let (mut closest, mut min_far) = (f64::INFINITY, f64::INFINITY);
+    for r in ring as isize - k..=ring as isize + k {
+        if r < 0 || r as usize >= scan.rings() {
+            continue;
+        }
+        for c in col - k..=col + k {
+            let cell = scan.cell(r as usize, c);
+            let Some(first) = scan.first(cell) else {
+                continue;
+            };
+            let r1 = frame.points[first].range();
+            let r2 = scan.second(cell).map_or(r1, |j| frame.points[j].range());
+            for x in [r1, r2] {
+                if (x - rq).abs() < (closest - rq).abs() {
+                    closest = x;
+                }
+            }
+            min_far = min_far.min(r1.max(r2));
+        }
+    }
+    Some((closest, min_far))
 }
 
 /// A k-d tree of a frame's Normal points (sensor frame).
