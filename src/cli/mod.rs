@@ -1,6 +1,7 @@
 //! Command-line parsing and the subcommands. A thin layer: it checks the
 //! arguments, loads inputs through the library and writes outputs.
 
+mod convert;
 mod demo;
 mod detect;
 mod eval;
@@ -25,6 +26,8 @@ enum Command {
     Detect(detect::DetectArgs),
     /// Score a predictions directory against the frames' labels.
     Eval(eval::EvalArgs),
+    /// Rewrite frames as compact binary (or ascii) PLY, with their poses.
+    Convert(convert::ConvertArgs),
     /// Run the showcase on the built-in sample and print the metrics.
     Demo(demo::DemoArgs),
     /// Print the effective configuration as TOML (every key with its value).
@@ -65,6 +68,7 @@ pub fn run() -> Result<()> {
         Command::Detect(args) => detect::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Convert(args) => convert::run(args),
         Command::Config { config } => {
             print!("{}", load_config(&config)?.to_toml());
             Ok(())
