@@ -25,6 +25,9 @@
 //! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
 //! `T_world_sensor`. Geometry is `f64`; bulk point storage is `f32`.
 
+// `!(x > 0.0)` is used deliberately: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod classify;
 pub mod cloud;
 pub mod config;

@@ -203,7 +203,13 @@ pub fn decide(
         }
         let mirrored = bp.plane.mirror(&p);
         let along_beam = if params.free_space_test || params.support_test {
-            returns_along(scan, sensor, frame, &mirrored, params.free_space_neighbourhood)
+            returns_along(
+                scan,
+                sensor,
+                frame,
+                &mirrored,
+                params.free_space_neighbourhood,
+            )
         } else {
             None
         };
@@ -217,8 +223,9 @@ pub fn decide(
             }
         }
         if params.support_test {
-            let on_beam = along_beam
-                .is_some_and(|(closest, _)| (closest - mirrored_range).abs() <= params.support_range);
+            let on_beam = along_beam.is_some_and(|(closest, _)| {
+                (closest - mirrored_range).abs() <= params.support_range
+            });
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {

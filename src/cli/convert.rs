@@ -44,22 +44,42 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         entries.retain(|e| args.only.contains(&e.name));
     }
     let poses = match &args.poses {
-        Some(p) => Some(io::match_poses(&entries, &io::read_tum(p)?, args.pose_tolerance, p)?),
+        Some(p) => Some(io::match_poses(
+            &entries,
+            &io::read_tum(p)?,
+            args.pose_tolerance,
+            p,
+        )?),
         None => None,
     };
-    let encoding = if args.ascii { PlyEncoding::Ascii } else { PlyEncoding::BinaryLittleEndian };
+    let encoding = if args.ascii {
+        PlyEncoding::Ascii
+    } else {
+        PlyEncoding::BinaryLittleEndian
+    };
     for e in &entries {
         let frame = io::read_frame(&e.path)?;
-        io::write_frame(&args.out.join("frames").join(format!("{}.ply", e.name)), &frame, encoding)?;
+        io::write_frame(
+            &args.out.join("frames").join(format!("{}.ply", e.name)),
+            &frame,
+            encoding,
+        )?;
     }
     if let Some(poses) = poses {
         let stamped: Vec<StampedPose> = entries
             .iter()
             .zip(poses)
-            .map(|(e, pose)| StampedPose { stamp: e.stamp, pose })
+            .map(|(e, pose)| StampedPose {
+                stamp: e.stamp,
+                pose,
+            })
             .collect();
         io::write_tum(&args.out.join("poses.txt"), &stamped)?;
     }
-    println!("{} frames written to {}", entries.len(), args.out.join("frames").display());
+    println!(
+        "{} frames written to {}",
+        entries.len(),
+        args.out.join("frames").display()
+    );
     Ok(())
 }

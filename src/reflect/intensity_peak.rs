@@ -149,7 +149,7 @@ mod tests {
                 let dist_deg = (sensor.column_azimuth_deg(col) - 0.0).abs()
                     + (sensor.elevations_deg[ring] - 0.42).abs();
                 let intensity = if peak {
-                    (200.0 - 40.0 * dist_deg).max(10.0)
+                    (200.0 - 100.0 * dist_deg).max(10.0)
                 } else {
                     10.0
                 };

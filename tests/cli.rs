@@ -1,0 +1,159 @@
+//! The command-line tool: exit codes, messages, and no half-written outputs.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn specular(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_specular"))
+        .args(args)
+        .output()
+        .expect("run specular")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn detect_then_eval_on_the_sample() {
+    let sample = common::sample_dir();
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&sample.join("frames")),
+        "--poses",
+        s(&sample.join("poses.txt")),
+        "--out",
+        s(out.path()),
+        "--method",
+        "single-scan",
+        "--timings",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("accuracy") && stdout.contains("classify"),
+        "{stdout}"
+    );
+    for entry in specular::io::list_frames(&sample.join("frames")).unwrap() {
+        let frame = specular::io::read_frame(&entry.path).unwrap();
+        let labels = specular::io::read_labels(
+            &out.path().join(format!("predictions/{}.label", entry.name)),
+        )
+        .unwrap();
+        assert_eq!(labels.len(), frame.points.len());
+        assert!(labels.iter().all(|l| [0, 1, 2, 5, 6].contains(l)));
+    }
+    assert!(out.path().join("metrics.json").exists());
+    assert!(out.path().join("config.toml").exists());
+    let e = specular(&[
+        "eval",
+        "--frames",
+        s(&sample.join("frames")),
+        "--pred",
+        s(out.path()),
+    ]);
+    assert!(e.status.success(), "{}", stderr(&e));
+    // eval recomputes exactly what detect reported.
+    let line = |text: &str| {
+        text.lines()
+            .find(|l| l.starts_with("accuracy"))
+            .map(str::to_owned)
+    };
+    assert_eq!(line(&stdout), line(&String::from_utf8_lossy(&e.stdout)));
+}
+
+#[test]
+fn a_truncated_frame_fails_cleanly_and_writes_nothing() {
+    let sample = common::sample_dir();
+    let frames = tempfile::tempdir().unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let src = sample.join("frames/1689496219.652560.ply");
+    let bytes = std::fs::read(&src).unwrap();
+    std::fs::write(
+        frames.path().join("1689496219.652560.ply"),
+        &bytes[..bytes.len() / 2],
+    )
+    .unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(frames.path()),
+        "--out",
+        s(out.path()),
+        "--method",
+        "single-scan",
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("1689496219.652560.ply") && err.contains("truncated"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(
+        std::fs::read_dir(out.path()).unwrap().count(),
+        0,
+        "outputs written after an error"
+    );
+}
+
+#[test]
+fn a_frame_without_a_pose_is_named() {
+    let sample = common::sample_dir();
+    let poses = tempfile::NamedTempFile::new().unwrap();
+    std::fs::write(poses.path(), "1689496219.652560 0 0 0 0 0 0 1\n").unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&sample.join("frames")),
+        "--poses",
+        s(poses.path()),
+        "--out",
+        s(out.path()),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("no pose within") && err.contains("1689496220.052616"),
+        "{err}"
+    );
+}
+
+#[test]
+fn eval_rejects_predictions_of_the_wrong_length() {
+    let sample = common::sample_dir();
+    let pred = tempfile::tempdir().unwrap();
+    for stem in [
+        "1689496219.652560",
+        "1689496220.052616",
+        "1689496220.552407",
+    ] {
+        std::fs::write(pred.path().join(format!("{stem}.label")), [1u8, 0, 0, 0]).unwrap();
+    }
+    let o = specular(&[
+        "eval",
+        "--frames",
+        s(&sample.join("frames")),
+        "--pred",
+        s(pred.path()),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("1 predictions for 33718 points"), "{err}");
+}
+
+#[test]
+fn an_unknown_config_is_a_clear_error() {
+    let o = specular(&["config", "--config", "/nonexistent/x.toml"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("/nonexistent/x.toml"), "{}", stderr(&o));
+}
