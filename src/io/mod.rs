@@ -8,11 +8,13 @@
 pub mod atomic;
 pub mod frames;
 pub mod labels;
+pub mod planes;
 pub mod ply;
 pub mod tum;
 
 pub use atomic::write_atomic;
 pub use frames::{list_frames, match_poses, parse_stamp, FrameEntry};
 pub use labels::{read_labels, write_labels};
+pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};
