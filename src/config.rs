@@ -12,6 +12,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::classify::single_scan::SingleScanParams;
+use crate::classify::PlaneMapParams;
+use crate::map::MergeParams;
 use crate::reflect::DetectorParams;
 use crate::{Error, Result};
 
@@ -52,6 +54,52 @@ impl Default for InputParams {
     }
 }
 
+/// Map mergers selectable by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MergerName {
+    /// The paper's weighted average of plane parameters with hull union.
+    WeightedAverage,
+}
+
+/// The global plane map.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MapParams {
+    /// The merger.
+    pub merger: MergerName,
+    /// Landmarks observed fewer times are not used for classification
+    /// (paper: 10).
+    pub min_observations: usize,
+    /// Matching and weighting thresholds.
+    pub merge: MergeParams,
+}
+
+impl Default for MapParams {
+    fn default() -> Self {
+        Self {
+            merger: MergerName::WeightedAverage,
+            min_observations: 10,
+            merge: MergeParams::default(),
+        }
+    }
+}
+
+/// Output settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputParams {
+    /// Voxel size used to thin the accumulated PLY maps, m (0 keeps every
+    /// point).
+    pub map_voxel: f64,
+}
+
+impl Default for OutputParams {
+    fn default() -> Self {
+        Self { map_voxel: 0.03 }
+    }
+}
+
 /// The whole configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -68,6 +116,12 @@ pub struct Config {
     pub detector: DetectorParams,
     /// The single-scan classifier.
     pub single_scan: SingleScanParams,
+    /// The global plane map (plane-optimized pipeline).
+    pub map: MapParams,
+    /// The plane-map classifier (plane-optimized pipeline).
+    pub plane_map: PlaneMapParams,
+    /// Output settings.
+    pub output: OutputParams,
 }
 
 impl Default for Config {
@@ -79,6 +133,9 @@ impl Default for Config {
             input: InputParams::default(),
             detector: DetectorParams::default(),
             single_scan: SingleScanParams::default(),
+            map: MapParams::default(),
+            plane_map: PlaneMapParams::default(),
+            output: OutputParams::default(),
         }
     }
 }
@@ -132,6 +189,8 @@ impl Config {
                 self.single_scan.decision.glass_distance,
             ),
             ("input.pose_tolerance", self.input.pose_tolerance),
+            ("plane_map.decision.glass_distance", self.plane_map.decision.glass_distance),
+            ("plane_map.support_voxel", self.plane_map.support_voxel),
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
@@ -149,9 +208,16 @@ impl Config {
                 "detector.ransac.max_iterations and detector.max_planes must be at least 1".into(),
             );
         }
-        let dec = &self.single_scan.decision;
-        if dec.behind_distance < dec.glass_distance {
-            return Err("single_scan.decision.behind_distance must be >= glass_distance".into());
+        for (name, dec) in [("single_scan", &self.single_scan.decision), ("plane_map", &self.plane_map.decision)] {
+            if dec.behind_distance < dec.glass_distance {
+                return Err(format!("{name}.decision.behind_distance must be >= glass_distance"));
+            }
+        }
+        if self.map.min_observations == 0 {
+            return Err("map.min_observations must be at least 1".into());
+        }
+        if !(self.output.map_voxel >= 0.0) {
+            return Err("output.map_voxel must be >= 0".into());
         }
         Ok(())
     }

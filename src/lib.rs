@@ -35,6 +35,7 @@ pub mod error;
 pub mod eval;
 pub mod geometry;
 pub mod io;
+pub mod map;
 pub mod pipeline;
 pub mod reflect;
 pub mod rng;

@@ -12,15 +12,21 @@
 pub mod boundary;
 pub mod decide;
 pub mod mirror;
+pub mod plane_map;
 pub mod single_scan;
+pub mod support;
 
-pub use decide::DecisionParams;
+pub use decide::{DecisionParams, SurfaceSupport};
+pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
 pub use single_scan::SingleScanClassifier;
+pub use support::WorldSupport;
 
 use serde::{Deserialize, Serialize};
 
+use nalgebra::Isometry3;
+
 use crate::cloud::Frame;
-use crate::reflect::Detection;
+use crate::reflect::{BoundedPlane, Detection};
 use crate::sensor::{OrganizedScan, SensorModel};
 
 /// Predicted class of a point, with the prediction ids of the design brief.
@@ -81,6 +87,13 @@ pub struct FrameInput<'a> {
     pub sensor: &'a SensorModel,
     /// The frame's own detection (candidates, planes, inliers).
     pub detection: &'a Detection,
+    /// `T_world_sensor` of the frame (identity when unknown).
+    pub pose: Isometry3<f64>,
+    /// Reflective planes of the global map (world frame); empty when there
+    /// is no map.
+    pub map_planes: &'a [BoundedPlane],
+    /// Observed surfaces of the whole sequence (world frame), when built.
+    pub support: Option<&'a WorldSupport>,
 }
 
 /// Classifies every point of a frame. Implementations are selected by name

@@ -25,9 +25,9 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let sample = bundled_sample();
     let frames = sample.join("frames");
     let poses = sample.join("poses.txt");
-    let (sequence, output) = detect(&frames, Some(&poses), &config)
+    let (sequence, output, map) = detect(&frames, Some(&poses), &config)
         .with_context(|| format!("running the demo on {}", sample.display()))?;
-    write_outputs(&args.out, &config, &sequence, &output)?;
+    write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
     println!(
         "specular demo: {} real 3DRef frames ({}), method {}",
         sequence.len(),

@@ -6,7 +6,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use specular::config::{Config, Method};
 use specular::io;
-use specular::pipeline::{run_single_scan, RunOutput, Sequence, StageTimings};
+use specular::classify::Class;
+use specular::pipeline::plane_optimized::around_corner_map;
+use specular::pipeline::{run_plane_optimized, run_single_scan, PlaneOptimizedOutput, RunOutput, Sequence, StageTimings};
+use specular::reflect::BoundedPlane;
 
 use super::{load_config, MethodArg};
 
@@ -39,14 +42,22 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if let Some(m) = args.method {
         config.method = m.into();
     }
-    let (sequence, output) = detect(&args.frames, args.poses.as_deref(), &config)?;
-    write_outputs(&args.out, &config, &sequence, &output)?;
+    let (sequence, output, map) = detect(&args.frames, args.poses.as_deref(), &config)?;
+    write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
     println!(
         "{} frames, method {}: predictions in {}",
         sequence.len(),
         config.method.name(),
         args.out.join("predictions").display()
     );
+    if let Some(map) = &map {
+        println!(
+            "plane map: {} landmarks, {} used (observed at least {} times); planes.json, around_corner.ply",
+            map.map.landmarks.len(),
+            map.used.len(),
+            config.map.min_observations
+        );
+    }
     if let Some(conf) = output.confusion(&sequence) {
         print!("{}", conf.metrics().table());
     }
@@ -56,34 +67,41 @@ pub fn run(args: DetectArgs) -> Result<()> {
     Ok(())
 }
 
-/// Load a sequence and run the configured method on it.
+/// Load a sequence and run the configured method on it; the plane-optimized
+/// method also returns its map.
 pub(crate) fn detect(
     frames: &Path,
     poses: Option<&Path>,
     config: &Config,
-) -> Result<(Sequence, RunOutput)> {
+) -> Result<(Sequence, RunOutput, Option<PlaneOptimizedOutput>)> {
     let mut timings = StageTimings::default();
     let wall = std::time::Instant::now();
+    if config.method == Method::PlaneOptimized && poses.is_none() {
+        bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
+    }
     let sequence = Sequence::load(frames, poses, config.input.pose_tolerance, &mut timings)?;
-    let mut output = match config.method {
-        Method::SingleScan => run_single_scan(&sequence, config)?,
+    let (mut output, map) = match config.method {
+        Method::SingleScan => (run_single_scan(&sequence, config)?, None),
         Method::PlaneOptimized => {
-            bail!("method plane-optimized is not available yet; use --method single-scan")
+            let out = run_plane_optimized(&sequence, config)?;
+            (out.run.clone(), Some(out))
         }
     };
     timings.merge(&output.timings);
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     output.timings = timings;
-    Ok((sequence, output))
+    Ok((sequence, output, map))
 }
 
-/// Write predictions, metrics (when labelled) and the configuration used.
+/// Write predictions, metrics (when labelled), the configuration used and,
+/// with a plane map, `planes.json` and `around_corner.ply`.
 pub(crate) fn write_outputs(
     out: &Path,
     config: &Config,
     sequence: &Sequence,
     output: &RunOutput,
+    map: Option<&PlaneOptimizedOutput>,
 ) -> Result<()> {
     let pred_dir = out.join("predictions");
     for f in &output.frames {
@@ -93,6 +111,15 @@ pub(crate) fn write_outputs(
     io::write_atomic(&out.join("config.toml"), |w| {
         std::io::Write::write_all(w, config.to_toml().as_bytes())
     })?;
+    if let Some(map) = map {
+        let names: Vec<String> = sequence.frames.iter().map(|f| f.name.clone()).collect();
+        let records: Vec<_> = map.used.iter().map(|&i| map.map.landmarks[i].record(&names)).collect();
+        io::write_planes(&out.join("planes.json"), &records)?;
+        let planes: Vec<BoundedPlane> = map.used.iter().map(|&i| map.map.landmarks[i].bounded()).collect();
+        let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
+        let points = around_corner_map(sequence, &classes, &planes, config.plane_map.hull_margin, config.output.map_voxel);
+        io::write_map_ply(&out.join("around_corner.ply"), &points)?;
+    }
     if let Some(conf) = output.confusion(sequence) {
         let json = serde_json::to_string_pretty(&conf.metrics()).context("serialising metrics")?;
         io::write_atomic(&out.join("metrics.json"), |w| {

@@ -3,7 +3,7 @@
 //! Boundaries (hulls, panes) are convex polygons in a chart; a chart maps
 //! 3-D points on (or near) the plane to 2-D coordinates and back.
 
-use nalgebra::{Point2, Point3, Vector3};
+use nalgebra::{Isometry3, Point2, Point3, Vector3};
 
 use super::Plane;
 
@@ -50,5 +50,25 @@ impl PlaneChart {
     #[inline]
     pub fn to_3d(&self, q: &Point2<f64>) -> Point3<f64> {
         self.origin + self.u * q.x + self.v * q.y
+    }
+
+    /// The same chart expressed in another frame (`t` maps the current frame
+    /// to the new one). Chart coordinates of a physical point are unchanged,
+    /// so polygons in this chart stay valid.
+    pub fn transformed(&self, t: &Isometry3<f64>) -> Self {
+        Self {
+            origin: t * self.origin,
+            u: t.rotation * self.u,
+            v: t.rotation * self.v,
+            normal: t.rotation * self.normal,
+        }
+    }
+
+    /// The plane this chart lies on.
+    pub fn plane(&self) -> Plane {
+        Plane {
+            normal: self.normal,
+            d: -self.normal.dot(&self.origin.coords),
+        }
     }
 }

@@ -10,6 +10,7 @@
 //! - [`fit`]: least-squares and RANSAC plane fitting.
 
 pub mod chart;
+pub mod cluster;
 pub mod fit;
 pub mod plane;
 pub mod polygon;

@@ -8,6 +8,7 @@
 pub mod atomic;
 pub mod frames;
 pub mod labels;
+pub mod map_ply;
 pub mod planes;
 pub mod ply;
 pub mod tum;
@@ -15,6 +16,7 @@ pub mod tum;
 pub use atomic::write_atomic;
 pub use frames::{list_frames, match_poses, parse_stamp, FrameEntry};
 pub use labels::{read_labels, write_labels};
+pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

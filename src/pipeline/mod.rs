@@ -3,11 +3,13 @@
 //! The stages themselves take plain parameter structs; only this layer reads
 //! the [`Config`](crate::config::Config) and picks implementations by name.
 
+pub mod plane_optimized;
 pub mod registry;
 pub mod sequence;
 pub mod single_scan;
 pub mod timings;
 
+pub use plane_optimized::{run_plane_optimized, PlaneOptimizedOutput};
 pub use sequence::Sequence;
 pub use single_scan::run_single_scan;
 pub use timings::StageTimings;

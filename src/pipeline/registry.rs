@@ -1,8 +1,9 @@
 //! Name → implementation: the one place where configuration picks the
 //! implementations of the seams.
 
-use crate::classify::{Classifier, SingleScanClassifier};
-use crate::config::Config;
+use crate::classify::{Classifier, PlaneMapClassifier, SingleScanClassifier};
+use crate::config::{Config, MergerName};
+use crate::map::{MapMerger, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
 use crate::sensor::SensorModel;
 
@@ -17,6 +18,18 @@ pub fn detector(config: &Config, sensor: &SensorModel) -> Box<dyn ReflectiveDete
 /// The single-scan classifier configured in `[single_scan]`.
 pub fn single_scan_classifier(config: &Config) -> Box<dyn Classifier> {
     Box::new(SingleScanClassifier::new(config.single_scan))
+}
+
+/// The plane-map classifier configured in `[plane_map]`.
+pub fn plane_map_classifier(config: &Config) -> PlaneMapClassifier {
+    PlaneMapClassifier::new(config.plane_map)
+}
+
+/// The map merger named in `[map] merger`.
+pub fn merger(config: &Config) -> Box<dyn MapMerger> {
+    match config.map.merger {
+        MergerName::WeightedAverage => Box::new(WeightedAverageMerger::new(config.map.merge)),
+    }
 }
 
 /// A per-frame seed derived from the run seed and the frame's name, so a

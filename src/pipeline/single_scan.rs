@@ -58,6 +58,9 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
                 scan: &scan,
                 sensor: &sensor,
                 detection: &detection,
+                pose: nalgebra::Isometry3::identity(),
+                map_planes: &[],
+                support: None,
             });
             t.add("classify", start.elapsed());
             t.frames = 1;

@@ -8,7 +8,9 @@ use super::candidates::dual_return_candidates;
 use super::intensity_peak::{intensity_peak_candidates, IntensityPeakParams};
 use super::{BoundedPlane, Detection, ReflectiveDetector, ReflectivePlane};
 use crate::cloud::Frame;
+use crate::geometry::cluster::euclidean_clusters;
 use crate::geometry::fit::{ransac_plane, RansacParams};
+use crate::geometry::{Plane, PlaneChart};
 use crate::rng::SplitMix64;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -56,6 +58,13 @@ pub struct DetectorParams {
     pub ransac: RansacParams,
     /// Intensity-peak search settings.
     pub intensity_peak: IntensityPeakParams,
+    /// Inliers are grouped into clusters linked within this distance (m) in
+    /// the plane; only clusters of at least `min_cluster` points bound the
+    /// plane, so isolated edge echoes do not stretch the hull (0 disables:
+    /// the paper's hull of all inliers).
+    pub cluster_link: f64,
+    /// Minimum cluster size kept for the boundary.
+    pub min_cluster: usize,
 }
 
 impl Default for DetectorParams {
@@ -69,6 +78,8 @@ impl Default for DetectorParams {
             max_abs_normal_z: 1.0,
             ransac: RansacParams::default(),
             intensity_peak: IntensityPeakParams::default(),
+            cluster_link: 0.0,
+            min_cluster: 1,
         }
     }
 }
@@ -115,11 +126,14 @@ impl CandidateRansacDetector {
             let plane = fit.plane.facing(&origin);
             let inliers: Vec<u32> = fit.inliers.iter().map(|&k| remaining[k as usize]).collect();
             if plane.normal.z.abs() <= p.max_abs_normal_z {
-                let bounded = BoundedPlane::from_points(
-                    plane,
-                    inliers.iter().map(|&i| frame.points[i as usize].position()),
-                );
-                out.push(ReflectivePlane { bounded, inliers });
+                let support = self.boundary_support(frame, &plane, &inliers);
+                if support.len() >= 3 {
+                    let bounded = BoundedPlane::from_points(
+                        plane,
+                        support.iter().map(|&i| frame.points[i as usize].position()),
+                    );
+                    out.push(ReflectivePlane { bounded, inliers });
+                }
             }
             let mut is_inlier = vec![false; remaining.len()];
             for &k in &fit.inliers {
@@ -131,6 +145,33 @@ impl CandidateRansacDetector {
                 !is_inlier[k - 1]
             });
         }
+    }
+}
+
+impl CandidateRansacDetector {
+    /// The inliers that bound the plane: all of them, or those in clusters
+    /// of at least `min_cluster` points (see [`DetectorParams::cluster_link`]).
+    fn boundary_support(&self, frame: &Frame, plane: &Plane, inliers: &[u32]) -> Vec<u32> {
+        let p = &self.params;
+        if !(p.cluster_link > 0.0) {
+            return inliers.to_vec();
+        }
+        let chart = PlaneChart::of(plane);
+        let uv: Vec<_> = inliers
+            .iter()
+            .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
+            .collect();
+        let labels = euclidean_clusters(&uv, p.cluster_link);
+        let mut sizes = vec![0usize; labels.iter().max().map_or(0, |m| m + 1)];
+        for &l in &labels {
+            sizes[l] += 1;
+        }
+        inliers
+            .iter()
+            .zip(&labels)
+            .filter(|(_, &l)| sizes[l] >= p.min_cluster)
+            .map(|(&i, _)| i)
+            .collect()
     }
 }
 

@@ -13,7 +13,7 @@ pub mod intensity_peak;
 pub use detector::{CandidateRansacDetector, CandidateSource, DetectorParams};
 pub use intensity_peak::IntensityPeakParams;
 
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
 
 use crate::cloud::Frame;
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
@@ -50,6 +50,25 @@ impl BoundedPlane {
             self.boundary.contains(&uv)
         } else {
             self.boundary.signed_distance(&uv) <= margin
+        }
+    }
+
+    /// The same bounded plane in another frame (`t` maps the current frame to
+    /// the new one); the boundary polygon is unchanged.
+    pub fn transformed(&self, t: &Isometry3<f64>) -> Self {
+        Self {
+            plane: self.plane.transformed(t),
+            chart: self.chart.transformed(t),
+            boundary: self.boundary.clone(),
+        }
+    }
+
+    /// This bounded plane with its normal facing `viewpoint` (the chart and
+    /// boundary are unchanged: they do not depend on the orientation).
+    pub fn facing(&self, viewpoint: &Point3<f64>) -> Self {
+        Self {
+            plane: self.plane.facing(viewpoint),
+            ..self.clone()
         }
     }
 

@@ -1,0 +1,119 @@
+//! The paper's global classification: every frame against the reflective
+//! planes of the global map, with the map's fused hull boundaries and,
+//! beyond the paper, the observed surfaces of all frames as mirror support.
+
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+
+use super::boundary::BeamPlanes;
+use super::decide::{decide, DecisionParams, SurfaceSupport};
+use super::{Class, Classifier, FrameInput};
+use crate::reflect::BoundedPlane;
+
+/// Parameters of the plane-map classifier.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlaneMapParams {
+    /// Hull growth, metres.
+    pub hull_margin: f64,
+    /// Use the observed surfaces of all frames for the support test (the
+    /// paper uses the current frame only).
+    pub sequence_support: bool,
+    /// Voxel size used to thin the sequence's surface points, m.
+    pub support_voxel: f64,
+    /// The decision thresholds and switches.
+    pub decision: DecisionParams,
+}
+
+impl Default for PlaneMapParams {
+    fn default() -> Self {
+        Self {
+            hull_margin: 0.0,
+            sequence_support: false,
+            support_voxel: 0.05,
+            decision: DecisionParams {
+                depth_margin: 0.1,
+                obstacle_tests_on_all_returns: true,
+                support_test: true,
+                support_radius: 0.316,
+                ..DecisionParams::default()
+            },
+        }
+    }
+}
+
+/// Classifies a frame against the global map's reflective planes.
+#[derive(Debug, Clone)]
+pub struct PlaneMapClassifier {
+    params: PlaneMapParams,
+}
+
+impl PlaneMapClassifier {
+    /// A classifier with the given parameters.
+    pub fn new(params: PlaneMapParams) -> Self {
+        Self { params }
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &PlaneMapParams {
+        &self.params
+    }
+
+    /// The map planes in the frame's sensor frame, facing the sensor.
+    pub fn planes_in_sensor_frame(input: &FrameInput<'_>) -> Vec<BoundedPlane> {
+        let to_sensor = input.pose.inverse();
+        let origin = Point3::origin();
+        input
+            .map_planes
+            .iter()
+            .map(|bp| bp.transformed(&to_sensor).facing(&origin))
+            .collect()
+    }
+
+    /// Indices of the points whose beams cross no map plane or stop in front
+    /// of it: the frame's observed ordinary surfaces (Normal by the beam test
+    /// alone), used to build the sequence's surface support.
+    pub fn surface_points(&self, input: &FrameInput<'_>) -> Vec<usize> {
+        let planes = Self::planes_in_sensor_frame(input);
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
+        let glass = self.params.decision.glass_distance;
+        input
+            .frame
+            .points
+            .iter()
+            .enumerate()
+            .filter(|(_, pt)| {
+                let p = pt.position();
+                match beams.first_hit(&p, None) {
+                    None => true,
+                    Some((_, t)) => p.coords.norm() < t - glass,
+                }
+            })
+            .map(|(i, _)| i)
+            .collect()
+    }
+}
+
+impl Classifier for PlaneMapClassifier {
+    fn name(&self) -> &'static str {
+        "plane-map"
+    }
+
+    fn classify(&self, input: &FrameInput<'_>) -> Vec<Class> {
+        let planes = Self::planes_in_sensor_frame(input);
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
+        let view = input
+            .support
+            .filter(|_| self.params.sequence_support)
+            .map(|s| s.in_sensor_frame(input.pose));
+        let support = view.as_ref().map(|v| v as &dyn SurfaceSupport);
+        decide(
+            input.frame,
+            input.scan,
+            input.sensor,
+            &beams,
+            &self.params.decision,
+            support,
+        )
+    }
+}

@@ -1,0 +1,115 @@
+//! Landmarks and the map that holds them.
+
+use nalgebra::Point3;
+
+use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
+use crate::io::{PlaneKind, PlaneRecord};
+use crate::reflect::BoundedPlane;
+
+/// A plane seen in one frame, expressed in the world frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneObservation {
+    /// Kind of plane.
+    pub kind: PlaneKind,
+    /// The plane in the world frame, facing the sensor that saw it.
+    pub plane: Plane,
+    /// Boundary vertices (world frame, on the plane).
+    pub boundary: Vec<Point3<f64>>,
+    /// Index of the frame in the sequence.
+    pub frame: usize,
+}
+
+/// A plane landmark of the global map (world frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Landmark {
+    /// Unique id (index of creation).
+    pub id: usize,
+    /// Kind of plane.
+    pub kind: PlaneKind,
+    /// The plane, facing the sensors that observed it.
+    pub plane: Plane,
+    /// Boundary vertices in 3-D (world frame, on the plane), convex and
+    /// ordered; the polygon in the plane's chart is [`Landmark::bounded`].
+    pub boundary: Vec<Point3<f64>>,
+    /// Observations fused.
+    pub observations: usize,
+    /// First frame that observed it.
+    pub first_frame: usize,
+    /// Last frame that observed it.
+    pub last_frame: usize,
+}
+
+impl Landmark {
+    /// A landmark created from its first observation.
+    pub fn new(id: usize, obs: &PlaneObservation) -> Self {
+        Self {
+            id,
+            kind: obs.kind,
+            plane: obs.plane,
+            boundary: obs.boundary.clone(),
+            observations: 1,
+            first_frame: obs.frame,
+            last_frame: obs.frame,
+        }
+    }
+
+    /// The plane with its boundary as a convex polygon in its chart.
+    pub fn bounded(&self) -> BoundedPlane {
+        BoundedPlane::from_points(self.plane, self.boundary.iter().copied())
+    }
+
+    /// Area of the boundary, m².
+    pub fn area(&self) -> f64 {
+        self.bounded().boundary.area()
+    }
+
+    /// The `planes.json` record, with frame names from `frame_names`.
+    pub fn record(&self, frame_names: &[String]) -> PlaneRecord {
+        let b = self.bounded();
+        PlaneRecord {
+            id: self.id,
+            kind: self.kind,
+            material: None,
+            normal: self.plane.normal.into(),
+            d: self.plane.d,
+            hull: b.boundary_3d().iter().map(|p| [p.x, p.y, p.z]).collect(),
+            observations: self.observations,
+            first_frame: frame_names.get(self.first_frame).cloned(),
+            last_frame: frame_names.get(self.last_frame).cloned(),
+            panes: Vec::new(),
+        }
+    }
+}
+
+/// Project `points` onto `plane` and return their convex hull as 3-D points
+/// (in the plane's chart order, counter-clockwise seen from the normal side).
+pub fn hull_on_plane(plane: &Plane, points: impl IntoIterator<Item = Point3<f64>>) -> Vec<Point3<f64>> {
+    let chart = PlaneChart::of(plane);
+    let uv: Vec<_> = points.into_iter().map(|p| chart.to_2d(&p)).collect();
+    ConvexPolygon::hull(&uv)
+        .vertices()
+        .iter()
+        .map(|q| chart.to_3d(q))
+        .collect()
+}
+
+/// The global plane map.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PlaneMap {
+    /// Landmarks in creation order.
+    pub landmarks: Vec<Landmark>,
+}
+
+impl PlaneMap {
+    /// An empty map.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Landmarks observed at least `min_observations` times.
+    pub fn selected(&self, min_observations: usize) -> impl Iterator<Item = &Landmark> {
+        self.landmarks
+            .iter()
+            .filter(move |l| l.observations >= min_observations)
+    }
+}

@@ -1,0 +1,12 @@
+//! The global plane map: landmarks fused from per-frame plane observations.
+//!
+//! A [`PlaneMap`] holds [`Landmark`]s (kind, plane and boundary in the world
+//! frame, observation count, first/last frame). A [`MapMerger`] decides
+//! whether a new observation is a known landmark and how to fuse it; the
+//! paper's weighted-average merger is [`WeightedAverageMerger`].
+
+pub mod landmark;
+pub mod merge;
+
+pub use landmark::{Landmark, PlaneMap, PlaneObservation};
+pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};

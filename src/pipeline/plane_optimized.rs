@@ -1,0 +1,240 @@
+//! The paper's first pipeline, "Reflection Detection via Plane
+//! Optimization": with external poses, fuse every frame's reflective planes
+//! into a global map, then classify every frame against the map.
+//!
+//! 1. Detect reflective planes in each frame (sensor frame).
+//! 2. Transform them to the world frame and fuse them into the map in
+//!    timestamp order (`MapMerger`).
+//! 3. Keep the landmarks observed often enough.
+//! 4. Optionally gather the observed surfaces of all frames (mirror support).
+//! 5. Classify every frame against the kept landmarks.
+
+use std::collections::HashSet;
+use std::time::Instant;
+
+use nalgebra::{Isometry3, Point3};
+use rayon::prelude::*;
+
+use super::registry::{detector, frame_seed, merger, plane_map_classifier};
+use super::single_scan::check_frame;
+use super::{FrameOutput, RunOutput, Sequence, StageTimings};
+use crate::classify::mirror::mirror_reflections;
+use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
+use crate::config::Config;
+use crate::io::{MapPoint, PlaneKind};
+use crate::map::{PlaneMap, PlaneObservation};
+use crate::reflect::{BoundedPlane, Detection};
+use crate::sensor::{OrganizedScan, SensorModel};
+use crate::{Error, Result};
+
+/// What the plane-optimized pipeline produces besides the classes.
+#[derive(Debug, Clone)]
+pub struct PlaneOptimizedOutput {
+    /// Per-frame classes and timings.
+    pub run: RunOutput,
+    /// The fused map (every landmark, used or not).
+    pub map: PlaneMap,
+    /// Indices into `map.landmarks` of the landmarks used to classify.
+    pub used: Vec<usize>,
+}
+
+/// Run the plane-optimized pipeline. The sequence must carry poses.
+pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<PlaneOptimizedOutput> {
+    let wall = Instant::now();
+    let poses = sequence.poses.as_ref().ok_or_else(|| {
+        Error::Input("the plane-optimized method needs a pose per frame (--poses FILE)".into())
+    })?;
+    let sensor = SensorModel::resolve(&config.sensor)?;
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
+    let detector = detector(config, &sensor);
+    let mut timings = StageTimings::default();
+
+    // 1. Per-frame detection (sensor frame), in parallel.
+    let per_frame: Vec<(OrganizedScan, Detection, StageTimings)> = sequence
+        .frames
+        .par_iter()
+        .map(|frame| {
+            let mut t = StageTimings::default();
+            let start = Instant::now();
+            let scan = OrganizedScan::build(frame, &sensor)?;
+            t.add("pair", start.elapsed());
+            let start = Instant::now();
+            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
+            t.add("detect", start.elapsed());
+            Ok((scan, detection, t))
+        })
+        .collect::<Result<_>>()?;
+    for (_, _, t) in &per_frame {
+        timings.merge(t);
+    }
+
+    // 2-3. Fuse into the map in timestamp order; keep well-observed landmarks.
+    let start = Instant::now();
+    let merger = merger(config);
+    let mut map = PlaneMap::new();
+    for (k, (_, detection, _)) in per_frame.iter().enumerate() {
+        for obs in observations(detection, &poses[k], k) {
+            merger.merge(&mut map, &obs);
+        }
+    }
+    let used: Vec<usize> = map
+        .landmarks
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.observations >= config.map.min_observations)
+        .map(|(i, _)| i)
+        .collect();
+    let map_planes: Vec<BoundedPlane> = used.iter().map(|&i| map.landmarks[i].bounded()).collect();
+    timings.add("map", start.elapsed());
+
+    // 4-5. Classify every frame against the map.
+    let classifier = plane_map_classifier(config);
+    let input = |k: usize| FrameInput {
+        frame: &sequence.frames[k],
+        scan: &per_frame[k].0,
+        sensor: &sensor,
+        detection: &per_frame[k].1,
+        pose: poses[k],
+        map_planes: &map_planes,
+        support: None,
+    };
+    let start = Instant::now();
+    let support = classifier
+        .params()
+        .sequence_support
+        .then(|| sequence_support(&classifier, sequence.len(), &input));
+    timings.add("support", start.elapsed());
+    let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
+        .into_par_iter()
+        .map(|k| {
+            let start = Instant::now();
+            let classes = classifier.classify(&FrameInput {
+                support: support.as_ref(),
+                ..input(k)
+            });
+            (classes, start.elapsed())
+        })
+        .collect();
+    let mut frames = Vec::with_capacity(sequence.len());
+    for (k, (classes, d)) in classified.into_iter().enumerate() {
+        timings.add("classify", d);
+        frames.push(FrameOutput {
+            name: sequence.frames[k].name.clone(),
+            classes,
+            planes: per_frame[k].1.planes.len(),
+            candidates: per_frame[k].1.candidates.len(),
+        });
+    }
+    timings.frames = sequence.len();
+    timings.wall = wall.elapsed();
+    Ok(PlaneOptimizedOutput {
+        run: RunOutput { frames, timings },
+        map,
+        used,
+    })
+}
+
+/// A frame's reflective planes as world-frame observations.
+pub fn observations(detection: &Detection, pose: &Isometry3<f64>, frame: usize) -> Vec<PlaneObservation> {
+    detection
+        .planes
+        .iter()
+        .map(|rp| PlaneObservation {
+            kind: PlaneKind::Reflective,
+            plane: rp.bounded.plane.transformed(pose),
+            boundary: rp.bounded.boundary_3d().iter().map(|p| pose * p).collect(),
+            frame,
+        })
+        .collect()
+}
+
+/// The observed surfaces of every frame (world frame), thinned by voxel.
+fn sequence_support<'a>(
+    classifier: &PlaneMapClassifier,
+    frames: usize,
+    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
+) -> WorldSupport {
+    let per_frame: Vec<Vec<Point3<f64>>> = (0..frames)
+        .into_par_iter()
+        .map(|k| {
+            let inp = input(k);
+            classifier
+                .surface_points(&inp)
+                .into_iter()
+                .map(|i| inp.pose * inp.frame.points[i].position())
+                .collect()
+        })
+        .collect();
+    WorldSupport::build(per_frame.into_iter().flatten(), classifier.params().support_voxel)
+}
+
+/// The classified map in the world frame ("around the corner"): Normal,
+/// reflective-surface and Obstacle points where they were measured,
+/// Reflections mirrored back through their plane; unclassified points are
+/// left out. Thinned to one point per `voxel` per class (0 keeps all).
+pub fn around_corner_map(
+    sequence: &Sequence,
+    classes: &[Vec<Class>],
+    map_planes: &[BoundedPlane],
+    hull_margin: f64,
+    voxel: f64,
+) -> Vec<MapPoint> {
+    let Some(poses) = &sequence.poses else {
+        return Vec::new();
+    };
+    let per_frame: Vec<Vec<MapPoint>> = (0..sequence.len())
+        .into_par_iter()
+        .map(|k| {
+            let frame = &sequence.frames[k];
+            let pose = poses[k];
+            let to_sensor = pose.inverse();
+            let origin = Point3::origin();
+            let planes: Vec<BoundedPlane> = map_planes
+                .iter()
+                .map(|bp| bp.transformed(&to_sensor).facing(&origin))
+                .collect();
+            let mut out: Vec<MapPoint> = frame
+                .points
+                .iter()
+                .zip(&classes[k])
+                .filter(|(_, c)| matches!(c, Class::Normal | Class::Glass | Class::Obstacle))
+                .map(|(pt, &class)| map_point(pose * pt.position(), class, false))
+                .collect();
+            for (_, q) in mirror_reflections(frame, &classes[k], &planes, hull_margin) {
+                out.push(map_point(pose * q, Class::Reflection, true));
+            }
+            out
+        })
+        .collect();
+    thin(per_frame.into_iter().flatten(), voxel)
+}
+
+fn map_point(p: Point3<f64>, class: Class, mirrored: bool) -> MapPoint {
+    MapPoint {
+        xyz: [p.x as f32, p.y as f32, p.z as f32],
+        class,
+        mirrored,
+    }
+}
+
+/// Keep the first point per (voxel, class, mirrored), in input order.
+fn thin(points: impl Iterator<Item = MapPoint>, voxel: f64) -> Vec<MapPoint> {
+    if !(voxel > 0.0) {
+        return points.collect();
+    }
+    let mut seen = HashSet::new();
+    points
+        .filter(|p| {
+            let key = (
+                (p.xyz[0] as f64 / voxel).floor() as i64,
+                (p.xyz[1] as f64 / voxel).floor() as i64,
+                (p.xyz[2] as f64 / voxel).floor() as i64,
+                p.class.id(),
+                p.mirrored,
+            );
+            seen.insert(key)
+        })
+        .collect()
+}
