@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::classify::single_scan::SingleScanParams;
 use crate::classify::PlaneMapParams;
-use crate::map::MergeParams;
+use crate::map::{EvidenceParams, MergeParams};
 use crate::reflect::DetectorParams;
 use crate::{Error, Result};
 
@@ -73,6 +73,8 @@ pub struct MapParams {
     pub min_observations: usize,
     /// Matching and weighting thresholds.
     pub merge: MergeParams,
+    /// Transparency evidence that refines the landmarks' boundaries.
+    pub evidence: EvidenceParams,
 }
 
 impl Default for MapParams {
@@ -81,6 +83,7 @@ impl Default for MapParams {
             merger: MergerName::WeightedAverage,
             min_observations: 10,
             merge: MergeParams::default(),
+            evidence: EvidenceParams::default(),
         }
     }
 }
@@ -189,7 +192,10 @@ impl Config {
                 self.single_scan.decision.glass_distance,
             ),
             ("input.pose_tolerance", self.input.pose_tolerance),
-            ("plane_map.decision.glass_distance", self.plane_map.decision.glass_distance),
+            (
+                "plane_map.decision.glass_distance",
+                self.plane_map.decision.glass_distance,
+            ),
             ("plane_map.support_voxel", self.plane_map.support_voxel),
         ];
         for (name, v) in positive {
@@ -208,9 +214,14 @@ impl Config {
                 "detector.ransac.max_iterations and detector.max_planes must be at least 1".into(),
             );
         }
-        for (name, dec) in [("single_scan", &self.single_scan.decision), ("plane_map", &self.plane_map.decision)] {
+        for (name, dec) in [
+            ("single_scan", &self.single_scan.decision),
+            ("plane_map", &self.plane_map.decision),
+        ] {
             if dec.behind_distance < dec.glass_distance {
-                return Err(format!("{name}.decision.behind_distance must be >= glass_distance"));
+                return Err(format!(
+                    "{name}.decision.behind_distance must be >= glass_distance"
+                ));
             }
         }
         if self.map.min_observations == 0 {

@@ -95,6 +95,7 @@ pub struct BeamPlanes<'a> {
     planes: &'a [BoundedPlane],
     windows: Option<Vec<Window>>,
     margin: f64,
+    reach: f64,
 }
 
 impl<'a> BeamPlanes<'a> {
@@ -104,6 +105,7 @@ impl<'a> BeamPlanes<'a> {
             planes,
             windows: None,
             margin,
+            reach: f64::INFINITY,
         }
     }
 
@@ -113,7 +115,16 @@ impl<'a> BeamPlanes<'a> {
             planes,
             windows: Some(windows),
             margin: 0.0,
+            reach: f64::INFINITY,
         }
+    }
+
+    /// Ignore crossings farther than `reach` beyond the point itself: for a
+    /// point in front of every plane the answer is the same ("in front"),
+    /// and the boundary test is skipped.
+    pub fn with_reach(mut self, reach: f64) -> Self {
+        self.reach = reach;
+        self
     }
 
     /// The planes.
@@ -122,7 +133,8 @@ impl<'a> BeamPlanes<'a> {
     }
 
     /// The nearest plane crossed by the beam from the sensor origin towards
-    /// `p` inside its boundary: `(plane index, range of the crossing)`.
+    /// `p` inside its boundary, not farther than the point plus the reach:
+    /// `(plane index, range of the crossing)`.
     /// `cell` is the point's (ring, column) for window boundaries.
     pub fn first_hit(
         &self,
@@ -140,7 +152,7 @@ impl<'a> BeamPlanes<'a> {
             let Some(t) = bp.plane.ray_intersection(&origin, &dir) else {
                 continue;
             };
-            if best.is_some_and(|(_, bt)| bt <= t) {
+            if t > range + self.reach || best.is_some_and(|(_, bt)| bt <= t) {
                 continue;
             }
             let inside = match (&self.windows, cell) {

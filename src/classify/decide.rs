@@ -129,6 +129,7 @@ pub fn decide(
     let n = frame.points.len();
     let columns = scan.columns();
     let bounded = planes.planes();
+    let planes = planes.clone().with_reach(params.glass_distance);
     // 1. Beam test.
     let beams: Vec<Beam> = frame
         .points

@@ -75,8 +75,8 @@ impl PlaneMapClassifier {
     /// alone), used to build the sequence's surface support.
     pub fn surface_points(&self, input: &FrameInput<'_>) -> Vec<usize> {
         let planes = Self::planes_in_sensor_frame(input);
-        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
         let glass = self.params.decision.glass_distance;
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin).with_reach(glass);
         input
             .frame
             .points

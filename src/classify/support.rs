@@ -5,11 +5,10 @@
 //! the Normal points of *all* frames (not only the current one) a reflection
 //! of a surface seen from elsewhere in the sequence is recognised too.
 
-use std::collections::HashSet;
-
 use nalgebra::{Isometry3, Point3};
 
 use super::decide::SurfaceSupport;
+use crate::geometry::voxel::{voxel_key, FxHashSet};
 
 /// A k-d tree of observed surface points in the world frame, thinned to one
 /// point per voxel so its size is bounded by the scene, not the sequence.
@@ -20,7 +19,9 @@ pub struct WorldSupport {
 
 impl std::fmt::Debug for WorldSupport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("WorldSupport").field("points", &self.points).finish()
+        f.debug_struct("WorldSupport")
+            .field("points", &self.points)
+            .finish()
     }
 }
 
@@ -28,15 +29,10 @@ impl WorldSupport {
     /// Build from world-frame points, keeping the first point of each
     /// `voxel`-sized cube (deterministic for a given input order).
     pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64) -> Self {
-        let mut seen = HashSet::new();
+        let mut seen = FxHashSet::default();
         let mut kept: Vec<[f64; 3]> = Vec::new();
         for p in points {
-            let key = (
-                (p.x / voxel).floor() as i64,
-                (p.y / voxel).floor() as i64,
-                (p.z / voxel).floor() as i64,
-            );
-            if seen.insert(key) {
+            if seen.insert(voxel_key([p.x, p.y, p.z], voxel)) {
                 kept.push([p.x, p.y, p.z]);
             }
         }

@@ -4,11 +4,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use specular::classify::Class;
 use specular::config::{Config, Method};
 use specular::io;
-use specular::classify::Class;
 use specular::pipeline::plane_optimized::around_corner_map;
-use specular::pipeline::{run_plane_optimized, run_single_scan, PlaneOptimizedOutput, RunOutput, Sequence, StageTimings};
+use specular::pipeline::{
+    run_plane_optimized, run_single_scan, PlaneOptimizedOutput, RunOutput, Sequence, StageTimings,
+};
 use specular::reflect::BoundedPlane;
 
 use super::{load_config, MethodArg};
@@ -113,11 +115,25 @@ pub(crate) fn write_outputs(
     })?;
     if let Some(map) = map {
         let names: Vec<String> = sequence.frames.iter().map(|f| f.name.clone()).collect();
-        let records: Vec<_> = map.used.iter().map(|&i| map.map.landmarks[i].record(&names)).collect();
+        let records: Vec<_> = map
+            .used
+            .iter()
+            .map(|&i| map.map.landmarks[i].record(&names))
+            .collect();
         io::write_planes(&out.join("planes.json"), &records)?;
-        let planes: Vec<BoundedPlane> = map.used.iter().map(|&i| map.map.landmarks[i].bounded()).collect();
+        let planes: Vec<BoundedPlane> = map
+            .used
+            .iter()
+            .map(|&i| map.map.landmarks[i].bounded())
+            .collect();
         let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
-        let points = around_corner_map(sequence, &classes, &planes, config.plane_map.hull_margin, config.output.map_voxel);
+        let points = around_corner_map(
+            sequence,
+            &classes,
+            &planes,
+            config.plane_map.hull_margin,
+            config.output.map_voxel,
+        );
         io::write_map_ply(&out.join("around_corner.ply"), &points)?;
     }
     if let Some(conf) = output.confusion(sequence) {

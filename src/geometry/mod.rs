@@ -12,9 +12,11 @@
 pub mod chart;
 pub mod cluster;
 pub mod fit;
+pub mod grid;
 pub mod plane;
 pub mod polygon;
 pub mod se3;
+pub mod voxel;
 
 pub use chart::PlaneChart;
 pub use plane::Plane;

@@ -32,9 +32,25 @@ pub enum PlyEncoding {
 }
 
 /// Read one 3DRef frame. The file stem is the timestamp in seconds.
+///
+/// The file is read into a per-thread buffer that is reused across calls,
+/// so parsing a sequence does not fault in fresh pages for every frame.
 pub fn read_frame(path: &Path) -> Result<Frame> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_frame(&bytes, path)
+    thread_local! {
+        static BUFFER: std::cell::RefCell<Vec<u8>> = const { std::cell::RefCell::new(Vec::new()) };
+    }
+    BUFFER.with(|cell| {
+        let mut buf = cell.borrow_mut();
+        buf.clear();
+        let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        std::io::Read::read_to_end(&mut file, &mut buf).map_err(|e| Error::io(path, e))?;
+        let frame = parse_frame(&buf, path);
+        // Do not keep an unusually large buffer alive.
+        if buf.capacity() > 64 << 20 {
+            *buf = Vec::new();
+        }
+        frame
+    })
 }
 
 /// Read several frames in parallel (rayon), in the order of `paths`.

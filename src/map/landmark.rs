@@ -83,7 +83,10 @@ impl Landmark {
 
 /// Project `points` onto `plane` and return their convex hull as 3-D points
 /// (in the plane's chart order, counter-clockwise seen from the normal side).
-pub fn hull_on_plane(plane: &Plane, points: impl IntoIterator<Item = Point3<f64>>) -> Vec<Point3<f64>> {
+pub fn hull_on_plane(
+    plane: &Plane,
+    points: impl IntoIterator<Item = Point3<f64>>,
+) -> Vec<Point3<f64>> {
     let chart = PlaneChart::of(plane);
     let uv: Vec<_> = points.into_iter().map(|p| chart.to_2d(&p)).collect();
     ConvexPolygon::hull(&uv)

@@ -70,7 +70,9 @@ impl WeightedAverageMerger {
         // Overlap (the paper's test): the hulls are disjoint when the hull of
         // their union is larger than both areas together.
         let chart = PlaneChart::of(&l.plane);
-        let to_2d = |pts: &[nalgebra::Point3<f64>]| -> Vec<_> { pts.iter().map(|q| chart.to_2d(q)).collect() };
+        let to_2d = |pts: &[nalgebra::Point3<f64>]| -> Vec<_> {
+            pts.iter().map(|q| chart.to_2d(q)).collect()
+        };
         let a = ConvexPolygon::hull(&to_2d(&l.boundary));
         let b = ConvexPolygon::hull(&to_2d(&obs.boundary));
         a.union_hull(&b).area() <= a.area() + b.area()

@@ -5,8 +5,10 @@
 //! whether a new observation is a known landmark and how to fuse it; the
 //! paper's weighted-average merger is [`WeightedAverageMerger`].
 
+pub mod evidence;
 pub mod landmark;
 pub mod merge;
 
+pub use evidence::{gather_evidence, EvidenceFrame, EvidenceParams};
 pub use landmark::{Landmark, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};

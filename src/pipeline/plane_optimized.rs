@@ -9,7 +9,7 @@
 //! 4. Optionally gather the observed surfaces of all frames (mirror support).
 //! 5. Classify every frame against the kept landmarks.
 
-use std::collections::HashSet;
+use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::{Isometry3, Point3};
@@ -21,8 +21,9 @@ use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
 use crate::config::Config;
+use crate::geometry::voxel::{voxel_key, FxHashSet};
 use crate::io::{MapPoint, PlaneKind};
-use crate::map::{PlaneMap, PlaneObservation};
+use crate::map::{gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
 use crate::reflect::{BoundedPlane, Detection};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
@@ -86,8 +87,25 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         .filter(|(_, l)| l.observations >= config.map.min_observations)
         .map(|(i, _)| i)
         .collect();
-    let map_planes: Vec<BoundedPlane> = used.iter().map(|&i| map.landmarks[i].bounded()).collect();
+    let mut map_planes: Vec<BoundedPlane> =
+        used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
+
+    // Transparency evidence of every used landmark over all frames.
+    if config.map.evidence.enabled {
+        let start = Instant::now();
+        let frames: Vec<EvidenceFrame<'_>> = (0..sequence.len())
+            .map(|k| EvidenceFrame {
+                frame: &sequence.frames[k],
+                scan: &per_frame[k].0,
+                pose: poses[k],
+            })
+            .collect();
+        for bp in &mut map_planes {
+            bp.evidence = gather_evidence(bp, &frames, &config.map.evidence).map(Arc::new);
+        }
+        timings.add("evidence", start.elapsed());
+    }
 
     // 4-5. Classify every frame against the map.
     let classifier = plane_map_classifier(config);
@@ -137,7 +155,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
 }
 
 /// A frame's reflective planes as world-frame observations.
-pub fn observations(detection: &Detection, pose: &Isometry3<f64>, frame: usize) -> Vec<PlaneObservation> {
+pub fn observations(
+    detection: &Detection,
+    pose: &Isometry3<f64>,
+    frame: usize,
+) -> Vec<PlaneObservation> {
     detection
         .planes
         .iter()
@@ -167,7 +189,10 @@ fn sequence_support<'a>(
                 .collect()
         })
         .collect();
-    WorldSupport::build(per_frame.into_iter().flatten(), classifier.params().support_voxel)
+    WorldSupport::build(
+        per_frame.into_iter().flatten(),
+        classifier.params().support_voxel,
+    )
 }
 
 /// The classified map in the world frame ("around the corner"): Normal,
@@ -224,17 +249,11 @@ fn thin(points: impl Iterator<Item = MapPoint>, voxel: f64) -> Vec<MapPoint> {
     if !(voxel > 0.0) {
         return points.collect();
     }
-    let mut seen = HashSet::new();
+    let mut seen = FxHashSet::default();
     points
         .filter(|p| {
-            let key = (
-                (p.xyz[0] as f64 / voxel).floor() as i64,
-                (p.xyz[1] as f64 / voxel).floor() as i64,
-                (p.xyz[2] as f64 / voxel).floor() as i64,
-                p.class.id(),
-                p.mirrored,
-            );
-            seen.insert(key)
+            let v = voxel_key(p.xyz.map(f64::from), voxel);
+            seen.insert((v, p.class.id(), p.mirrored))
         })
         .collect()
 }

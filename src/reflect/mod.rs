@@ -16,6 +16,9 @@ pub use intensity_peak::IntensityPeakParams;
 use nalgebra::{Isometry3, Point3};
 
 use crate::cloud::Frame;
+use std::sync::Arc;
+
+use crate::geometry::grid::{EvidenceGrid, Surface};
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
 use crate::sensor::OrganizedScan;
 
@@ -28,6 +31,9 @@ pub struct BoundedPlane {
     pub chart: PlaneChart,
     /// Convex boundary in chart coordinates.
     pub boundary: ConvexPolygon,
+    /// Transparency evidence in the same chart, when gathered: where it is
+    /// decided it overrides the convex boundary.
+    pub evidence: Option<Arc<EvidenceGrid>>,
 }
 
 impl BoundedPlane {
@@ -39,13 +45,21 @@ impl BoundedPlane {
             plane,
             chart,
             boundary: ConvexPolygon::hull(&projected),
+            evidence: None,
         }
     }
 
-    /// Whether the plane point `q` lies within the boundary grown by `margin`.
+    /// Whether the plane point `q` lies within the reflective extent: where
+    /// transparency evidence decides, its verdict; elsewhere the convex
+    /// boundary grown by `margin`.
     #[inline]
     pub fn bounds(&self, q: &Point3<f64>, margin: f64) -> bool {
         let uv = self.chart.to_2d(q);
+        match self.evidence.as_ref().map(|e| e.state(&uv)) {
+            Some(Surface::Transparent) => return true,
+            Some(Surface::Opaque) => return false,
+            _ => {}
+        }
         if margin == 0.0 {
             self.boundary.contains(&uv)
         } else {
@@ -60,6 +74,7 @@ impl BoundedPlane {
             plane: self.plane.transformed(t),
             chart: self.chart.transformed(t),
             boundary: self.boundary.clone(),
+            evidence: self.evidence.clone(),
         }
     }
 

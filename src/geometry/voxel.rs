@@ -1,0 +1,66 @@
+//! Voxel keys and a fast, deterministic voxel set for thinning point sets.
+
+use std::collections::HashSet;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// The integer voxel of `p` for cubes of edge `size`.
+#[inline]
+pub fn voxel_key(p: [f64; 3], size: f64) -> [i64; 3] {
+    [
+        (p[0] / size).floor() as i64,
+        (p[1] / size).floor() as i64,
+        (p[2] / size).floor() as i64,
+    ]
+}
+
+/// The Fx hash (as used inside rustc): a multiply-rotate hash, much faster
+/// than SipHash for small integer keys and deterministic across runs.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct FxHasher {
+    hash: u64,
+}
+
+const SEED: u64 = 0x51_7c_c1_b7_27_22_0a_95;
+
+impl FxHasher {
+    #[inline]
+    fn add(&mut self, word: u64) {
+        self.hash = (self.hash.rotate_left(5) ^ word).wrapping_mul(SEED);
+    }
+}
+
+impl Hasher for FxHasher {
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.add(u64::from_le_bytes(c.try_into().unwrap_or([0; 8])));
+        }
+        for &b in chunks.remainder() {
+            self.add(b as u64);
+        }
+    }
+
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+
+    #[inline]
+    fn write_i64(&mut self, i: i64) {
+        self.add(i as u64);
+    }
+
+    #[inline]
+    fn write_u8(&mut self, i: u8) {
+        self.add(i as u64);
+    }
+
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.hash
+    }
+}
+
+/// A hash set with the Fx hash.
+pub type FxHashSet<T> = HashSet<T, BuildHasherDefault<FxHasher>>;

@@ -1,0 +1,203 @@
+//! Transparency evidence of a plane landmark, gathered over all frames.
+//!
+//! A reflective plane is an infinite plane; the paper bounds it by the convex
+//! hull of its candidate points, so wall on the same plane is called glass
+//! and glass beyond the candidates is missed. The scans say more: where a
+//! beam crosses the plane and returns from *behind* it, or where a surface
+//! echo on the plane has a second return behind it, the plane is transparent
+//! or reflective there; where a beam ends *on* the plane with a single
+//! return as bright as an ordinary surface, it is opaque, and a single weak
+//! echo like the plane's glass echoes is glass with nothing behind it in
+//! range. "Bright" is relative to the landmark's own glass echoes (the
+//! median intensity of its surface echoes that have a return behind them),
+//! so no sensor-specific intensity scale is assumed. Echoes near normal
+//! incidence are not used: glass peaks there like a wall. Votes are counted
+//! on a grid in the landmark's chart.
+
+use nalgebra::{Isometry3, Point2, Point3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::cloud::Frame;
+use crate::geometry::grid::EvidenceGrid;
+use crate::reflect::BoundedPlane;
+use crate::sensor::OrganizedScan;
+
+/// Settings of the evidence grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvidenceParams {
+    /// Gather evidence and let it override the convex boundary.
+    pub enabled: bool,
+    /// Cell edge length, m.
+    pub cell: f64,
+    /// The grid covers the landmark's hull grown by this much, m.
+    pub margin: f64,
+    /// Votes (cell and neighbours) needed to decide a cell.
+    pub min_votes: u32,
+    /// A return within this range of the crossing is on the plane, m.
+    pub surface_band: f64,
+    /// A return this far beyond the crossing is behind the plane, m.
+    pub behind: f64,
+    /// A single echo on the plane brighter than this many times the median
+    /// glass echo is opaque (wall-like); a dimmer one is glass.
+    pub opaque_intensity_ratio: f64,
+    /// Single echoes within this angle of normal incidence cast no vote
+    /// (glass echoes peak there), degrees.
+    pub peak_angle_deg: f64,
+    /// Upper bound on the grid size (cells).
+    pub max_cells: usize,
+}
+
+impl Default for EvidenceParams {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            cell: 0.2,
+            margin: 1.5,
+            min_votes: 3,
+            surface_band: 0.1,
+            behind: 0.1,
+            opaque_intensity_ratio: 3.0,
+            peak_angle_deg: 5.0,
+            max_cells: 4_000_000,
+        }
+    }
+}
+
+/// One frame to gather evidence from.
+#[derive(Debug, Clone, Copy)]
+pub struct EvidenceFrame<'a> {
+    /// The frame (sensor-frame points).
+    pub frame: &'a Frame,
+    /// Its organized scan (return pairing).
+    pub scan: &'a OrganizedScan,
+    /// `T_world_sensor`.
+    pub pose: Isometry3<f64>,
+}
+
+/// Evidence for `landmark` (world frame) over `frames`; `None` when the
+/// landmark has no usable boundary extent.
+pub fn gather_evidence(
+    landmark: &BoundedPlane,
+    frames: &[EvidenceFrame<'_>],
+    params: &EvidenceParams,
+) -> Option<EvidenceGrid> {
+    let vs = landmark.boundary.vertices();
+    let (mut lo, mut hi) = (
+        Point2::new(f64::INFINITY, f64::INFINITY),
+        Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    for v in vs {
+        lo = Point2::new(lo.x.min(v.x), lo.y.min(v.y));
+        hi = Point2::new(hi.x.max(v.x), hi.y.max(v.y));
+    }
+    let m = params.margin;
+    let empty = EvidenceGrid::new(
+        Point2::new(lo.x - m, lo.y - m),
+        Point2::new(hi.x + m, hi.y + m),
+        params.cell,
+        params.min_votes,
+        params.max_cells,
+    )?;
+    let partial: Vec<(EvidenceGrid, Votes)> = frames
+        .par_iter()
+        .map(|f| {
+            let mut grid = empty.empty_like();
+            let votes = vote_frame(
+                &mut grid,
+                &landmark.transformed(&f.pose.inverse()),
+                f,
+                params,
+            );
+            (grid, votes)
+        })
+        .collect();
+    let mut total = empty;
+    let mut glass_echoes = Vec::new();
+    for (g, v) in &partial {
+        total.add(g);
+        glass_echoes.extend_from_slice(&v.glass_echo_intensity);
+    }
+    // Single echoes on the plane: opaque when brighter than the landmark's
+    // glass echoes by the ratio, glass otherwise (all opaque when the
+    // landmark has no dual-return glass echo to compare with).
+    let threshold = median(&mut glass_echoes).map(|m| m * params.opaque_intensity_ratio);
+    for (_, v) in &partial {
+        for &(uv, intensity) in &v.single_echoes {
+            match threshold {
+                Some(th) if (intensity as f64) <= th => total.vote(&uv, 1, 0),
+                _ => total.vote(&uv, 0, 1),
+            }
+        }
+    }
+    total.finalize();
+    Some(total)
+}
+
+/// Votes of one frame that need the whole sequence to be weighed.
+#[derive(Debug, Default)]
+struct Votes {
+    /// Intensities of surface echoes with a return behind the plane.
+    glass_echo_intensity: Vec<f32>,
+    /// Single echoes on the plane: chart position and intensity.
+    single_echoes: Vec<(Point2<f64>, f32)>,
+}
+
+fn median(v: &mut [f32]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mid = v.len() / 2;
+    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    Some(v[mid] as f64)
+}
+
+/// Add one frame's transparent votes and collect its echoes on the plane;
+/// `plane` is the landmark in the frame's sensor frame (same chart
+/// coordinates as the grid).
+fn vote_frame(
+    grid: &mut EvidenceGrid,
+    plane: &BoundedPlane,
+    f: &EvidenceFrame<'_>,
+    p: &EvidenceParams,
+) -> Votes {
+    let origin = Point3::origin();
+    let cos_peak = p.peak_angle_deg.to_radians().cos();
+    let mut votes = Votes::default();
+    for (i, pt) in f.frame.points.iter().enumerate() {
+        let x = pt.position();
+        let r = x.coords.norm();
+        if !(r > 0.0) {
+            continue;
+        }
+        let dir = x.coords / r;
+        let Some(t) = plane.plane.ray_intersection(&origin, &dir) else {
+            continue;
+        };
+        let uv = plane.chart.to_2d(&(origin + dir * t));
+        if grid.index(&uv).is_none() {
+            continue;
+        }
+        let s = r - t;
+        if s > p.behind {
+            grid.vote(&uv, 1, 0);
+        } else if s.abs() <= p.surface_band {
+            match f.scan.partner(i) {
+                // A surface echo with a return behind the plane: glass.
+                Some(j) if f.frame.points[j].range() - t > p.behind => {
+                    grid.vote(&uv, 1, 0);
+                    votes.glass_echo_intensity.push(pt.intensity);
+                }
+                Some(_) => {}
+                // The beam ended on the plane.
+                None => {
+                    if plane.plane.normal.dot(&dir).abs() < cos_peak {
+                        votes.single_echoes.push((uv, pt.intensity));
+                    }
+                }
+            }
+        }
+    }
+    votes
+}
