@@ -157,3 +157,54 @@ fn an_unknown_config_is_a_clear_error() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("/nonexistent/x.toml"), "{}", stderr(&o));
 }
+
+#[test]
+fn plane_optimized_writes_the_map_files() {
+    let sample = common::sample_dir();
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&sample.join("frames")),
+        "--poses",
+        s(&sample.join("poses.txt")),
+        "--out",
+        s(out.path()),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let planes = specular::io::read_planes(&out.path().join("planes.json")).unwrap();
+    assert_eq!(planes.len(), 1);
+    assert_eq!(planes[0].observations, 3);
+    assert!(planes[0].hull.len() >= 3);
+    let ply = std::fs::read(out.path().join("around_corner.ply")).unwrap();
+    let header_end = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let header = String::from_utf8_lossy(&ply[..header_end]);
+    let count: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(count > 10_000, "{count} points");
+    assert!(header.contains("property uchar class") && header.contains("property uchar mirrored"));
+    assert_eq!(ply.len() - header_end, count * 17);
+    // Mirrored reflections are in the map.
+    let body = &ply[header_end..];
+    let mirrored = (0..count).filter(|i| body[i * 17 + 16] == 1).count();
+    assert!(mirrored > 100, "{mirrored} mirrored points");
+}
+
+#[test]
+fn plane_optimized_without_poses_is_a_clear_error() {
+    let sample = common::sample_dir();
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&sample.join("frames")),
+        "--out",
+        s(out.path()),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("needs poses"), "{}", stderr(&o));
+}

@@ -125,3 +125,58 @@ pub trait ReflectiveDetector: Send + Sync {
     /// randomised parts deterministic.
     fn detect(&self, frame: &Frame, scan: &OrganizedScan, seed: u64) -> Detection;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::grid::EvidenceGrid;
+    use nalgebra::{Point2, Vector3};
+
+    /// The unit square on the plane x = 2 (normal facing the origin).
+    fn square() -> BoundedPlane {
+        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 2.0).unwrap();
+        let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        BoundedPlane::from_points(plane, corners.iter().map(|&(y, z)| Point3::new(2.0, y, z)))
+    }
+
+    #[test]
+    fn hull_edges_are_inclusive_and_margins_grow_them() {
+        let b = square();
+        assert!((b.boundary.area() - 1.0).abs() < 1e-9);
+        assert!(b.bounds(&Point3::new(2.0, 0.5, 0.999), 0.0));
+        assert!(b.bounds(&Point3::new(2.0, 1.0, 0.5), 0.0), "on the edge");
+        assert!(!b.bounds(&Point3::new(2.0, 1.01, 0.5), 0.0));
+        assert!(b.bounds(&Point3::new(2.0, 1.04, 0.5), 0.05));
+        assert!(!b.bounds(&Point3::new(2.0, 1.06, 0.5), 0.05));
+        assert!(
+            !b.bounds(&Point3::new(2.0, -0.01, -0.01), 0.0),
+            "outside a corner"
+        );
+    }
+
+    #[test]
+    fn decided_evidence_overrides_the_hull() {
+        let mut b = square();
+        let uv = |y: f64, z: f64| b.chart.to_2d(&Point3::new(2.0, y, z));
+        let (inside, outside) = (uv(0.5, 0.5), uv(1.5, 0.5));
+        let lo = Point2::new(inside.x.min(outside.x) - 1.0, inside.y.min(outside.y) - 1.0);
+        let hi = Point2::new(inside.x.max(outside.x) + 1.0, inside.y.max(outside.y) + 1.0);
+        let mut grid = EvidenceGrid::new(lo, hi, 0.1, 2, 10_000).unwrap();
+        grid.vote(&inside, 0, 5);
+        grid.vote(&outside, 5, 0);
+        grid.finalize();
+        b.evidence = Some(Arc::new(grid));
+        assert!(
+            !b.bounds(&Point3::new(2.0, 0.5, 0.5), 0.0),
+            "opaque inside the hull"
+        );
+        assert!(
+            b.bounds(&Point3::new(2.0, 1.5, 0.5), 0.0),
+            "transparent outside the hull"
+        );
+        assert!(
+            b.bounds(&Point3::new(2.0, 0.2, 0.8), 0.0),
+            "undecided: the hull"
+        );
+    }
+}
