@@ -50,14 +50,14 @@ pub fn euclidean_clusters(points: &[Point2<f64>], link: f64) -> Vec<usize> {
             }
         }
     }
-    let mut labels = vec![0; n];
     let mut ids: HashMap<usize, usize> = HashMap::new();
-    for i in 0..n {
-        let root = find(&mut parent, i);
-        let next = ids.len();
-        labels[i] = *ids.entry(root).or_insert(next);
-    }
-    labels
+    (0..n)
+        .map(|i| {
+            let root = find(&mut parent, i);
+            let next = ids.len();
+            *ids.entry(root).or_insert(next)
+        })
+        .collect()
 }
 
 #[cfg(test)]
