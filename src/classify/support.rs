@@ -8,7 +8,7 @@
 use nalgebra::{Isometry3, Point3};
 
 use super::decide::SurfaceSupport;
-use crate::geometry::voxel::{voxel_key, FxHashSet};
+use crate::geometry::voxel::{packed_voxel_key, FxHashSet};
 
 /// A k-d tree of observed surface points in the world frame, thinned to one
 /// point per voxel so its size is bounded by the scene, not the sequence.
@@ -29,10 +29,12 @@ impl WorldSupport {
     /// Build from world-frame points, keeping the first point of each
     /// `voxel`-sized cube (deterministic for a given input order).
     pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64) -> Self {
-        let mut seen = FxHashSet::default();
+        let points = points.into_iter();
+        let mut seen =
+            FxHashSet::with_capacity_and_hasher(points.size_hint().0 / 4, Default::default());
         let mut kept: Vec<[f64; 3]> = Vec::new();
         for p in points {
-            if seen.insert(voxel_key([p.x, p.y, p.z], voxel)) {
+            if seen.insert(packed_voxel_key([p.x, p.y, p.z], voxel)) {
                 kept.push([p.x, p.y, p.z]);
             }
         }
@@ -62,11 +64,12 @@ impl WorldSupport {
         let Some(tree) = &self.tree else {
             return false;
         };
+        let r2 = radius * radius;
         let nn = tree
             .query(&[p.x, p.y, p.z])
             .nearest_one::<kiddo::SquaredEuclidean<f64>>()
             .execute();
-        nn.distance <= radius * radius
+        nn.distance <= r2
     }
 
     /// A view answering in the sensor frame of a frame with pose `pose`.

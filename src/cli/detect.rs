@@ -44,8 +44,11 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if let Some(m) = args.method {
         config.method = m.into();
     }
-    let (sequence, output, map) = detect(&args.frames, args.poses.as_deref(), &config)?;
+    let (sequence, mut output, map) = detect(&args.frames, args.poses.as_deref(), &config)?;
+    let start = std::time::Instant::now();
     write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
+    output.timings.add("write outputs", start.elapsed());
+    output.timings.wall += start.elapsed();
     println!(
         "{} frames, method {}: predictions in {}",
         sequence.len(),

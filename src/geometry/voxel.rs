@@ -13,6 +13,16 @@ pub fn voxel_key(p: [f64; 3], size: f64) -> [i64; 3] {
     ]
 }
 
+/// `voxel_key` packed into one `u64` (21 bits per axis, two's complement),
+/// exact for voxel indices within ±2^20 (±52 km at 5 cm voxels); beyond that
+/// distinct voxels may share a key, which only thins a little more.
+#[inline]
+pub fn packed_voxel_key(p: [f64; 3], size: f64) -> u64 {
+    let k = voxel_key(p, size);
+    let m = (1u64 << 21) - 1;
+    ((k[0] as u64) & m) | (((k[1] as u64) & m) << 21) | (((k[2] as u64) & m) << 42)
+}
+
 /// The Fx hash (as used inside rustc): a multiply-rotate hash, much faster
 /// than SipHash for small integer keys and deterministic across runs.
 #[derive(Debug, Default, Clone, Copy)]

@@ -29,7 +29,10 @@ where
         let mut w = BufWriter::with_capacity(1 << 20, file);
         fill(&mut w)?;
         w.flush()?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        // No fsync: the rename alone guarantees that readers never see a
+        // partial file; durability across power loss is not this tool's job
+        // and an fsync per file dominated the run time of short runs.
+        drop(w.into_inner().map_err(|e| e.into_error())?);
         std::fs::rename(&tmp, path)
     })();
     if let Err(e) = result {

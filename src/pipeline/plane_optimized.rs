@@ -21,7 +21,7 @@ use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
 use crate::config::Config;
-use crate::geometry::voxel::{voxel_key, FxHashSet};
+use crate::geometry::voxel::{packed_voxel_key, FxHashSet};
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
 use crate::reflect::{BoundedPlane, Detection};
@@ -249,11 +249,11 @@ fn thin(points: impl Iterator<Item = MapPoint>, voxel: f64) -> Vec<MapPoint> {
     if !(voxel > 0.0) {
         return points.collect();
     }
-    let mut seen = FxHashSet::default();
+    let mut seen = FxHashSet::with_capacity_and_hasher(1 << 16, Default::default());
     points
         .filter(|p| {
-            let v = voxel_key(p.xyz.map(f64::from), voxel);
-            seen.insert((v, p.class.id(), p.mirrored))
+            let v = packed_voxel_key(p.xyz.map(f64::from), voxel);
+            seen.insert((v, p.class.id() | (p.mirrored as u8) << 7))
         })
         .collect()
 }
