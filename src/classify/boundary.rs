@@ -141,6 +141,14 @@ impl<'a> BeamPlanes<'a> {
         p: &Point3<f64>,
         cell: Option<(usize, usize, usize)>,
     ) -> Option<(usize, f64)> {
+        // A point more than `reach` in front of a plane that faces the sensor
+        // cannot be on or behind it along its beam (|r - t| >= |s|): skip
+        // such planes without a ray intersection.
+        let relevant =
+            |bp: &BoundedPlane| bp.plane.d <= 0.0 || bp.plane.signed_distance(p) <= self.reach;
+        if !self.planes.iter().any(relevant) {
+            return None;
+        }
         let range = p.coords.norm();
         if !(range > 0.0) {
             return None;
@@ -149,6 +157,9 @@ impl<'a> BeamPlanes<'a> {
         let origin = Point3::origin();
         let mut best: Option<(usize, f64)> = None;
         for (k, bp) in self.planes.iter().enumerate() {
+            if !relevant(bp) {
+                continue;
+            }
             let Some(t) = bp.plane.ray_intersection(&origin, &dir) else {
                 continue;
             };

@@ -3,13 +3,37 @@
 use std::collections::HashSet;
 use std::hash::{BuildHasherDefault, Hasher};
 
+/// `floor(x)` as an integer without a libm call (on the baseline x86-64
+/// target `f64::floor` is a function call, which dominated voxel hashing).
+/// Saturates like `as` for values outside the `i64` range; NaN gives 0.
+#[inline(always)]
+pub fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i - 1
+    } else {
+        i
+    }
+}
+
+/// `round(x)` (half away from zero) as an integer without a libm call.
+#[inline(always)]
+pub fn round_i64(x: f64) -> i64 {
+    if x >= 0.0 {
+        floor_i64(x + 0.5)
+    } else {
+        -floor_i64(-x + 0.5)
+    }
+}
+
 /// The integer voxel of `p` for cubes of edge `size`.
 #[inline]
 pub fn voxel_key(p: [f64; 3], size: f64) -> [i64; 3] {
+    let inv = 1.0 / size;
     [
-        (p[0] / size).floor() as i64,
-        (p[1] / size).floor() as i64,
-        (p[2] / size).floor() as i64,
+        floor_i64(p[0] * inv),
+        floor_i64(p[1] * inv),
+        floor_i64(p[2] * inv),
     ]
 }
 
@@ -69,6 +93,21 @@ impl Hasher for FxHasher {
     #[inline]
     fn finish(&self) -> u64 {
         self.hash
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn integer_floor_and_round_match_std() {
+        for x in [
+            -2.5, -2.0, -1.5, -0.5, -0.0, 0.0, 0.49999, 0.5, 1.5, 2.0, 2.5, 1e15, -1e15, 7.3, -7.3,
+        ] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "floor {x}");
+            assert_eq!(round_i64(x), x.round() as i64, "round {x}");
+        }
     }
 }
 

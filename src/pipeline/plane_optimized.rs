@@ -189,9 +189,11 @@ fn sequence_support<'a>(
                 .collect()
         })
         .collect();
+    let params = classifier.params();
     WorldSupport::build(
         per_frame.into_iter().flatten(),
-        classifier.params().support_voxel,
+        params.support_voxel,
+        params.decision.support_radius,
     )
 }
 

@@ -121,7 +121,7 @@ impl SensorModel {
     #[inline]
     pub fn column_of(&self, x: f64, y: f64) -> usize {
         let deg = 180.0 + y.atan2(x).to_degrees();
-        let c = (deg / self.column_step_deg()).round() as i64;
+        let c = crate::geometry::voxel::round_i64(deg / self.column_step_deg());
         c.rem_euclid(self.columns as i64) as usize
     }
 
