@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::classify::single_scan::SingleScanParams;
 use crate::classify::PlaneMapParams;
-use crate::map::{EvidenceParams, MergeParams};
+use crate::map::{EvidenceParams, MergeParams, PaneParams};
 use crate::reflect::DetectorParams;
 use crate::{Error, Result};
 
@@ -62,6 +62,19 @@ pub enum MergerName {
     WeightedAverage,
 }
 
+/// How a reflective landmark's extent on its infinite plane is bounded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BoundaryMode {
+    /// The convex hull of the fused candidate hulls (the paper).
+    Hull,
+    /// The hull, overridden cell by cell by the transparency evidence grid.
+    EvidenceGrid,
+    /// Separate panes found in the evidence, each bounded by a convex
+    /// polygon fitted as a linear program.
+    Panes,
+}
+
 /// The global plane map.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -73,8 +86,12 @@ pub struct MapParams {
     pub min_observations: usize,
     /// Matching and weighting thresholds.
     pub merge: MergeParams,
-    /// Transparency evidence that refines the landmarks' boundaries.
+    /// How reflective landmarks are bounded.
+    pub boundary: BoundaryMode,
+    /// Transparency evidence (evidence-grid and panes boundaries).
     pub evidence: EvidenceParams,
+    /// Pane segmentation and boundary fitting (panes boundary).
+    pub panes: PaneParams,
 }
 
 impl Default for MapParams {
@@ -83,7 +100,9 @@ impl Default for MapParams {
             merger: MergerName::WeightedAverage,
             min_observations: 10,
             merge: MergeParams::default(),
+            boundary: BoundaryMode::Hull,
             evidence: EvidenceParams::default(),
+            panes: PaneParams::default(),
         }
     }
 }

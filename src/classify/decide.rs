@@ -72,6 +72,9 @@ pub struct DecisionParams {
     pub dual_gap: f64,
     /// Class given to behind-plane points no evidence decides.
     pub ambiguous: Class,
+    /// A single echo on a reflective plane that is brighter than the plane's
+    /// glass echoes (see the evidence grid) is an opaque surface (Normal).
+    pub wall_echo_test: bool,
 }
 
 impl Default for DecisionParams {
@@ -91,6 +94,7 @@ impl Default for DecisionParams {
             dual_return_rule: true,
             dual_gap: 0.1,
             ambiguous: Class::Unclassified,
+            wall_echo_test: false,
         }
     }
 }
@@ -143,7 +147,19 @@ pub fn decide(
                 Some((k, t)) => {
                     let s = p.coords.norm() - t;
                     if s.abs() <= params.glass_distance {
-                        Beam::Surface
+                        // A single echo as bright as a wall is the wall.
+                        let single = scan.partner(i).is_none();
+                        let cos = bounded[k].plane.normal.dot(&p.coords) / p.coords.norm();
+                        match &bounded[k].evidence {
+                            Some(e)
+                                if params.wall_echo_test
+                                    && single
+                                    && e.is_opaque_echo(pt.intensity, cos) =>
+                            {
+                                Beam::Front
+                            }
+                            _ => Beam::Surface,
+                        }
                     } else if s < 0.0 {
                         Beam::Front
                     } else if s <= params.behind_distance {

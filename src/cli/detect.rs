@@ -121,19 +121,16 @@ pub(crate) fn write_outputs(
         let records: Vec<_> = map
             .used
             .iter()
-            .map(|&i| map.map.landmarks[i].record(&names))
+            .zip(&map.planes)
+            .map(|(&i, bp)| map.map.landmarks[i].record(bp, &names))
             .collect();
         io::write_planes(&out.join("planes.json"), &records)?;
-        let planes: Vec<BoundedPlane> = map
-            .used
-            .iter()
-            .map(|&i| map.map.landmarks[i].bounded())
-            .collect();
+        let planes: &[BoundedPlane] = &map.planes;
         let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
         let points = around_corner_map(
             sequence,
             &classes,
-            &planes,
+            planes,
             config.plane_map.hull_margin,
             config.output.map_voxel,
         );

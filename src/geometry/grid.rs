@@ -10,6 +10,9 @@ pub enum Surface {
     Transparent,
     /// Beams end on it with nothing behind: an ordinary surface.
     Opaque,
+    /// Beams pass it, but the region around it returns no surface echo: an
+    /// opening (or the plane's extension into open space), not glass.
+    Open,
     /// Too little evidence either way.
     Unknown,
 }
@@ -29,8 +32,20 @@ pub struct EvidenceGrid {
     pub transparent: Vec<u32>,
     /// Opaque votes per cell (row-major).
     pub opaque: Vec<u32>,
+    /// The transparent votes that were echoes from the surface itself
+    /// (row-major); glass and mirrors return them, openings do not.
+    pub echo: Vec<u32>,
+    /// A transparent region whose echo votes are fewer than this share of
+    /// its transparent votes is an opening ([`Surface::Open`]).
+    pub min_echo_fraction: f64,
     /// Votes needed (over a cell and its 8 neighbours) to decide.
     pub min_votes: u32,
+    /// Single echoes on the plane brighter than this are from an opaque
+    /// surface (set from the plane's own glass echoes; `None`: unknown).
+    pub opaque_intensity: Option<f32>,
+    /// Echoes within this cosine of normal incidence are exempt from the
+    /// intensity test (glass peaks there like a wall).
+    pub peak_cos: f64,
     /// Cell states computed by [`EvidenceGrid::finalize`] (empty before).
     states: Vec<Surface>,
 }
@@ -60,7 +75,11 @@ impl EvidenceGrid {
             rows,
             transparent: vec![0; cols * rows],
             opaque: vec![0; cols * rows],
+            echo: vec![0; cols * rows],
+            min_echo_fraction: 0.0,
             min_votes,
+            opaque_intensity: None,
+            peak_cos: 1.0,
             states: Vec::new(),
         })
     }
@@ -91,17 +110,85 @@ impl EvidenceGrid {
         Self {
             transparent: vec![0; self.transparent.len()],
             opaque: vec![0; self.opaque.len()],
+            echo: vec![0; self.echo.len()],
             states: Vec::new(),
             ..self.clone()
         }
     }
 
     /// Compute every cell's state once, so [`state`](Self::state) is a
-    /// lookup. Votes added afterwards call for another `finalize`.
+    /// lookup: the vote majority per cell, then every connected transparent
+    /// region with too few surface echoes is marked [`Surface::Open`]. Votes
+    /// added afterwards call for another `finalize`.
     pub fn finalize(&mut self) {
-        self.states = (0..self.cols * self.rows)
-            .map(|k| self.vote_state(k))
-            .collect();
+        let n = self.cols * self.rows;
+        self.states = (0..n).map(|k| self.vote_state(k)).collect();
+        for region in self.regions(Surface::Transparent) {
+            let t: u64 = region.iter().map(|&k| self.transparent[k] as u64).sum();
+            let e: u64 = region.iter().map(|&k| self.echo[k] as u64).sum();
+            if (e as f64) < self.min_echo_fraction * t as f64 {
+                for k in region {
+                    self.states[k] = Surface::Open;
+                }
+            }
+        }
+    }
+
+    /// The 8-connected regions of cells in `state`, each sorted, ordered by
+    /// their first cell.
+    pub fn regions(&self, state: Surface) -> Vec<Vec<usize>> {
+        let n = self.cols * self.rows;
+        let mut seen = vec![false; n];
+        let mut out = Vec::new();
+        for start in 0..n {
+            if seen[start] || self.cell_state(start) != state {
+                continue;
+            }
+            seen[start] = true;
+            let mut stack = vec![start];
+            let mut cells = Vec::new();
+            while let Some(k) = stack.pop() {
+                cells.push(k);
+                let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
+                for dj in -1..=1 {
+                    for di in -1..=1 {
+                        let (x, y) = (i + di, j + dj);
+                        if x < 0 || y < 0 || x as usize >= self.cols || y as usize >= self.rows {
+                            continue;
+                        }
+                        let m = y as usize * self.cols + x as usize;
+                        if !seen[m] && self.cell_state(m) == state {
+                            seen[m] = true;
+                            stack.push(m);
+                        }
+                    }
+                }
+            }
+            cells.sort_unstable();
+            out.push(cells);
+        }
+        out
+    }
+
+    /// Add a surface-echo vote (a transparent vote that is also an echo from
+    /// the surface itself) to the cell holding `uv`.
+    pub fn vote_echo(&mut self, uv: &Point2<f64>) {
+        if let Some(k) = self.index(uv) {
+            self.transparent[k] += 1;
+            self.echo[k] += 1;
+        }
+    }
+
+    /// Whether a single echo with this intensity, met at this cosine of
+    /// incidence, is too bright for the plane's glass: an opaque surface.
+    pub fn is_opaque_echo(&self, intensity: f32, cos_incidence: f64) -> bool {
+        self.opaque_intensity
+            .is_some_and(|th| intensity > th && cos_incidence.abs() < self.peak_cos)
+    }
+
+    /// Whether any cell is decided (transparent or opaque).
+    pub fn is_decided(&self) -> bool {
+        (0..self.cols * self.rows).any(|k| self.cell_state(k) != Surface::Unknown)
     }
 
     /// Add votes to the cell holding `uv` (ignored outside the grid).
@@ -118,6 +205,9 @@ impl EvidenceGrid {
             *a += b;
         }
         for (a, b) in self.opaque.iter_mut().zip(&other.opaque) {
+            *a += b;
+        }
+        for (a, b) in self.echo.iter_mut().zip(&other.echo) {
             *a += b;
         }
     }

@@ -276,6 +276,19 @@ impl ConvexPolygon {
         Self::hull(&poly)
     }
 
+    /// The part of the polygon in the half-plane `normal · x <= offset`.
+    pub fn clip(&self, normal: &Vector2<f64>, offset: f64) -> Self {
+        if self.is_empty() || !offset.is_finite() || !(normal.x.is_finite() && normal.y.is_finite())
+        {
+            return Self::default();
+        }
+        let poly = clip_half_plane(&self.vertices, normal, offset);
+        if poly.len() < 3 {
+            return Self::default();
+        }
+        Self::hull(&poly)
+    }
+
     /// Area of the intersection.
     pub fn intersection_area(&self, other: &Self) -> f64 {
         self.intersection(other).area()

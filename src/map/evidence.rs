@@ -27,8 +27,6 @@ use crate::sensor::OrganizedScan;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct EvidenceParams {
-    /// Gather evidence and let it override the convex boundary.
-    pub enabled: bool,
     /// Cell edge length, m.
     pub cell: f64,
     /// The grid covers the landmark's hull grown by this much, m.
@@ -45,6 +43,9 @@ pub struct EvidenceParams {
     /// Single echoes within this angle of normal incidence cast no vote
     /// (glass echoes peak there), degrees.
     pub peak_angle_deg: f64,
+    /// A transparent region with fewer surface echoes than this share of its
+    /// transparent votes is an opening, not glass.
+    pub min_echo_fraction: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
 }
@@ -52,7 +53,6 @@ pub struct EvidenceParams {
 impl Default for EvidenceParams {
     fn default() -> Self {
         Self {
-            enabled: false,
             cell: 0.2,
             margin: 1.5,
             min_votes: 3,
@@ -60,6 +60,7 @@ impl Default for EvidenceParams {
             behind: 0.1,
             opaque_intensity_ratio: 3.0,
             peak_angle_deg: 5.0,
+            min_echo_fraction: 0.0,
             max_cells: 4_000_000,
         }
     }
@@ -93,13 +94,14 @@ pub fn gather_evidence(
         hi = Point2::new(hi.x.max(v.x), hi.y.max(v.y));
     }
     let m = params.margin;
-    let empty = EvidenceGrid::new(
+    let mut empty = EvidenceGrid::new(
         Point2::new(lo.x - m, lo.y - m),
         Point2::new(hi.x + m, hi.y + m),
         params.cell,
         params.min_votes,
         params.max_cells,
     )?;
+    empty.min_echo_fraction = params.min_echo_fraction;
     let partial: Vec<(EvidenceGrid, Votes)> = frames
         .par_iter()
         .map(|f| {
@@ -123,10 +125,12 @@ pub fn gather_evidence(
     // glass echoes by the ratio, glass otherwise (all opaque when the
     // landmark has no dual-return glass echo to compare with).
     let threshold = median(&mut glass_echoes).map(|m| m * params.opaque_intensity_ratio);
+    total.opaque_intensity = threshold.map(|t| t as f32);
+    total.peak_cos = params.peak_angle_deg.to_radians().cos();
     for (_, v) in &partial {
         for &(uv, intensity) in &v.single_echoes {
             match threshold {
-                Some(th) if (intensity as f64) <= th => total.vote(&uv, 1, 0),
+                Some(th) if (intensity as f64) <= th => total.vote_echo(&uv),
                 _ => total.vote(&uv, 0, 1),
             }
         }
@@ -186,7 +190,7 @@ fn vote_frame(
             match f.scan.partner(i) {
                 // A surface echo with a return behind the plane: glass.
                 Some(j) if f.frame.points[j].range() - t > p.behind => {
-                    grid.vote(&uv, 1, 0);
+                    grid.vote_echo(&uv);
                     votes.glass_echo_intensity.push(pt.intensity);
                 }
                 Some(_) => {}

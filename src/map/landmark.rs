@@ -63,20 +63,35 @@ impl Landmark {
         self.bounded().boundary.area()
     }
 
-    /// The `planes.json` record, with frame names from `frame_names`.
-    pub fn record(&self, frame_names: &[String]) -> PlaneRecord {
-        let b = self.bounded();
+    /// The `planes.json` record, with frame names from `frame_names`; the
+    /// boundary and panes are taken from `bounded` (this landmark as used for
+    /// classification, e.g. with panes fitted).
+    pub fn record(&self, bounded: &BoundedPlane, frame_names: &[String]) -> PlaneRecord {
+        let b = bounded;
+        let to_3d = |poly: &ConvexPolygon| -> Vec<[f64; 3]> {
+            poly.vertices()
+                .iter()
+                .map(|q| {
+                    let p = b.chart.to_3d(q);
+                    [p.x, p.y, p.z]
+                })
+                .collect()
+        };
         PlaneRecord {
             id: self.id,
             kind: self.kind,
             material: None,
             normal: self.plane.normal.into(),
             d: self.plane.d,
-            hull: b.boundary_3d().iter().map(|p| [p.x, p.y, p.z]).collect(),
+            hull: to_3d(&b.boundary),
             observations: self.observations,
             first_frame: frame_names.get(self.first_frame).cloned(),
             last_frame: frame_names.get(self.last_frame).cloned(),
-            panes: Vec::new(),
+            panes: b
+                .panes
+                .as_ref()
+                .map(|ps| ps.iter().map(to_3d).collect())
+                .unwrap_or_default(),
         }
     }
 }

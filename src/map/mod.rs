@@ -5,10 +5,13 @@
 //! whether a new observation is a known landmark and how to fuse it; the
 //! paper's weighted-average merger is [`WeightedAverageMerger`].
 
+pub mod boundary_fit;
 pub mod evidence;
 pub mod landmark;
 pub mod merge;
+pub mod panes;
 
 pub use evidence::{gather_evidence, EvidenceFrame, EvidenceParams};
 pub use landmark::{Landmark, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
+pub use panes::{find_panes, Pane, PaneParams};

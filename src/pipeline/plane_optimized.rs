@@ -20,10 +20,10 @@ use super::single_scan::check_frame;
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
-use crate::config::Config;
+use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::{packed_voxel_key, FxHashSet};
 use crate::io::{MapPoint, PlaneKind};
-use crate::map::{gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
+use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
 use crate::reflect::{BoundedPlane, Detection};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
@@ -37,6 +37,9 @@ pub struct PlaneOptimizedOutput {
     pub map: PlaneMap,
     /// Indices into `map.landmarks` of the landmarks used to classify.
     pub used: Vec<usize>,
+    /// The used landmarks as bounded planes (world frame), with their
+    /// evidence and panes when gathered; same order as `used`.
+    pub planes: Vec<BoundedPlane>,
 }
 
 /// Run the plane-optimized pipeline. The sequence must carry poses.
@@ -91,8 +94,9 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
 
-    // Transparency evidence of every used landmark over all frames.
-    if config.map.evidence.enabled {
+    // Transparency evidence of every used landmark over all frames, and the
+    // panes found in it.
+    if config.map.boundary != BoundaryMode::Hull {
         let start = Instant::now();
         let frames: Vec<EvidenceFrame<'_>> = (0..sequence.len())
             .map(|k| EvidenceFrame {
@@ -105,6 +109,17 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
             bp.evidence = gather_evidence(bp, &frames, &config.map.evidence).map(Arc::new);
         }
         timings.add("evidence", start.elapsed());
+        if config.map.boundary == BoundaryMode::Panes {
+            let start = Instant::now();
+            for bp in &mut map_planes {
+                // Without any decided evidence the hull stays the boundary.
+                if let Some(grid) = bp.evidence.as_ref().filter(|g| g.is_decided()) {
+                    let panes = find_panes(grid, &config.map.panes);
+                    bp.panes = Some(Arc::new(panes.into_iter().map(|p| p.boundary).collect()));
+                }
+            }
+            timings.add("panes", start.elapsed());
+        }
     }
 
     // 4-5. Classify every frame against the map.
@@ -151,6 +166,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         run: RunOutput { frames, timings },
         map,
         used,
+        planes: map_planes,
     })
 }
 

@@ -34,6 +34,10 @@ pub struct BoundedPlane {
     /// Transparency evidence in the same chart, when gathered: where it is
     /// decided it overrides the convex boundary.
     pub evidence: Option<Arc<EvidenceGrid>>,
+    /// Separate reflective panes on this plane (chart coordinates), when
+    /// fitted: then the reflective extent is exactly their union (possibly
+    /// empty), and `boundary` and `evidence` are not consulted.
+    pub panes: Option<Arc<Vec<ConvexPolygon>>>,
 }
 
 impl BoundedPlane {
@@ -46,18 +50,36 @@ impl BoundedPlane {
             chart,
             boundary: ConvexPolygon::hull(&projected),
             evidence: None,
+            panes: None,
         }
     }
 
-    /// Whether the plane point `q` lies within the reflective extent: where
-    /// transparency evidence decides, its verdict; elsewhere the convex
+    /// Whether the plane point `q` lies within the reflective extent: with
+    /// panes, inside one of them (grown by `margin`) and not on a cell the
+    /// evidence calls opaque; otherwise, where
+    /// transparency evidence decides, its verdict, and elsewhere the convex
     /// boundary grown by `margin`.
     #[inline]
     pub fn bounds(&self, q: &Point3<f64>, margin: f64) -> bool {
         let uv = self.chart.to_2d(q);
+        if let Some(panes) = &self.panes {
+            // Opaque evidence inside a convex pane is a mullion or wall strip.
+            if let Some(Surface::Opaque | Surface::Open) =
+                self.evidence.as_ref().map(|e| e.state(&uv))
+            {
+                return false;
+            }
+            return panes.iter().any(|p| {
+                if margin == 0.0 {
+                    p.contains(&uv)
+                } else {
+                    p.signed_distance(&uv) <= margin
+                }
+            });
+        }
         match self.evidence.as_ref().map(|e| e.state(&uv)) {
             Some(Surface::Transparent) => return true,
-            Some(Surface::Opaque) => return false,
+            Some(Surface::Opaque | Surface::Open) => return false,
             _ => {}
         }
         if margin == 0.0 {
@@ -75,6 +97,7 @@ impl BoundedPlane {
             chart: self.chart.transformed(t),
             boundary: self.boundary.clone(),
             evidence: self.evidence.clone(),
+            panes: self.panes.clone(),
         }
     }
 
