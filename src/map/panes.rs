@@ -63,7 +63,13 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
         .into_iter()
         .filter(|cells| cells.len() as f64 * cell_area >= params.min_area)
         .filter_map(|cells| {
-            let inside: Vec<Point2<f64>> = cells.iter().map(|&k| grid.centre(k)).collect();
+            // Only the region's border cells constrain a convex boundary: the
+            // interior lies in their hull. This keeps the LP small (about the
+            // perimeter, not the area, in rows).
+            let inside: Vec<Point2<f64>> = border_cells(grid, &cells)
+                .into_iter()
+                .map(|k| grid.centre(k))
+                .collect();
             let (lo, hi) = bounds(&inside);
             let c = params.context;
             let outside: Vec<Point2<f64>> = opaque
@@ -80,6 +86,27 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
                 boundary,
                 solve_time: start.elapsed(),
             })
+        })
+        .collect()
+}
+
+/// The cells of a region (sorted indices) with a 4-neighbour outside it.
+fn border_cells(grid: &EvidenceGrid, cells: &[usize]) -> Vec<usize> {
+    let member = |x: isize, y: isize| {
+        x >= 0
+            && y >= 0
+            && (x as usize) < grid.cols
+            && (y as usize) < grid.rows
+            && cells
+                .binary_search(&(y as usize * grid.cols + x as usize))
+                .is_ok()
+    };
+    cells
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let (i, j) = ((k % grid.cols) as isize, (k / grid.cols) as isize);
+            !(member(i - 1, j) && member(i + 1, j) && member(i, j - 1) && member(i, j + 1))
         })
         .collect()
 }
