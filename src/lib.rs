@@ -16,6 +16,9 @@
 //! | [`sensor`] | sensor models (rings, columns) and the organized dual-return scan |
 //! | [`io`] | 3DRef PLY frames, TUM poses, prediction labels, frame/pose matching |
 //! | [`reflect`] | reflective-plane detection in one scan (`ReflectiveDetector`) |
+//! | [`frontend`] | ordinary and ground planes of one scan (`PlaneExtractor`) |
+//! | [`registration`] | plane matching, mismatch rejection (`MismatchRejector`), closed form and Gauss–Newton |
+//! | [`slam`] | scan-to-map tracking, degeneracy handling, map update |
 //! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
 //! | [`eval`] | the paper's metrics: precision, recall, IoU, removal rate |
 //! | [`pipeline`] | wiring: runs a method over a sequence of frames |
@@ -33,6 +36,7 @@ pub mod cloud;
 pub mod config;
 pub mod error;
 pub mod eval;
+pub mod frontend;
 pub mod geometry;
 pub mod io;
 pub mod map;
