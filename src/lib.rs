@@ -42,6 +42,7 @@ pub mod io;
 pub mod map;
 pub mod pipeline;
 pub mod reflect;
+pub mod registration;
 pub mod rng;
 pub mod sensor;
 
