@@ -1,11 +1,17 @@
-//! Scoring predictions against 3DRef labels, exactly as the paper defines it.
+//! Scoring: the paper's classification metrics and the trajectory error.
 //!
-//! Ground truth: Normal = label 1, Glass = labels 2 and 3 (glass and mirror),
+//! Classification ([`metrics`]), exactly as the paper defines it: ground
+//! truth Normal = label 1, Glass = labels 2 and 3 (glass and mirror),
 //! Reflection = 5, Obstacle = 6; labels 0 (unlabeled) and 4 (other
 //! reflective) are ignored. A point predicted unclassified (0) is wrong for
 //! every class's precision, recall and IoU, and counts as removed for the
 //! reflection removal rate.
+//!
+//! Trajectories ([`trajectory`]): ATE after SE(3) alignment, RPE per metre
+//! travelled, final drift.
 
 pub mod metrics;
+pub mod trajectory;
 
 pub use metrics::{ClassScores, Confusion, Metrics, EVAL_CLASSES};
+pub use trajectory::{trajectory_error, umeyama, TrajectoryError};
