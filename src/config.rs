@@ -13,8 +13,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::classify::single_scan::SingleScanParams;
 use crate::classify::PlaneMapParams;
+use crate::frontend::ExtractorParams;
 use crate::map::{EvidenceParams, MergeParams, PaneParams};
 use crate::reflect::DetectorParams;
+use crate::slam::SlamParams;
 use crate::{Error, Result};
 
 /// Which pipeline `detect` runs.
@@ -142,6 +144,10 @@ pub struct Config {
     pub map: MapParams,
     /// The plane-map classifier (plane-optimized pipeline).
     pub plane_map: PlaneMapParams,
+    /// Ordinary and ground plane extraction (Reflection SLAM front end).
+    pub extractor: ExtractorParams,
+    /// Reflection SLAM: registration, tracking, map maintenance.
+    pub slam: SlamParams,
     /// Output settings.
     pub output: OutputParams,
 }
@@ -157,6 +163,8 @@ impl Default for Config {
             single_scan: SingleScanParams::default(),
             map: MapParams::default(),
             plane_map: PlaneMapParams::default(),
+            extractor: ExtractorParams::default(),
+            slam: SlamParams::default(),
             output: OutputParams::default(),
         }
     }
@@ -216,6 +224,22 @@ impl Config {
                 self.plane_map.decision.glass_distance,
             ),
             ("plane_map.support_voxel", self.plane_map.support_voxel),
+            ("extractor.ransac.distance", self.extractor.ransac.distance),
+            (
+                "extractor.ground.ransac.distance",
+                self.extractor.ground.ransac.distance,
+            ),
+            ("extractor.normals.max_gap", self.extractor.normals.max_gap),
+            ("extractor.min_area", self.extractor.min_area),
+            (
+                "slam.rejector.inlier_offset",
+                self.slam.rejector.inlier_offset,
+            ),
+            (
+                "slam.frame_matching.max_centroid_distance",
+                self.slam.frame_matching.max_centroid_distance,
+            ),
+            ("slam.rpe_segment", self.slam.rpe_segment),
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
@@ -242,6 +266,45 @@ impl Config {
                     "{name}.decision.behind_distance must be >= glass_distance"
                 ));
             }
+        }
+        for (name, r) in [
+            ("extractor.ransac", &self.extractor.ransac),
+            ("extractor.ground.ransac", &self.extractor.ground.ransac),
+        ] {
+            if !(r.probability > 0.0 && r.probability < 1.0) || r.max_iterations == 0 {
+                return Err(format!(
+                    "{name}: probability must be in (0, 1) and max_iterations at least 1"
+                ));
+            }
+        }
+        if self.extractor.min_points < 3 {
+            return Err("extractor.min_points must be at least 3".into());
+        }
+        for (name, v) in [
+            (
+                "slam.frame_matching.min_normal_cos",
+                self.slam.frame_matching.min_normal_cos,
+            ),
+            (
+                "slam.map_matching.min_normal_cos",
+                self.slam.map_matching.min_normal_cos,
+            ),
+            (
+                "slam.map_matching.min_overlap",
+                self.slam.map_matching.min_overlap,
+            ),
+        ] {
+            if !(v > 0.0 && v <= 1.0) {
+                return Err(format!("{name} must be in (0, 1], got {v}"));
+            }
+        }
+        if !(self.slam.gauss_newton.degeneracy_threshold >= 0.0)
+            || !(self.slam.rejector.min_eigenvalue >= 0.0)
+        {
+            return Err(
+                "slam.gauss_newton.degeneracy_threshold and slam.rejector.min_eigenvalue must be >= 0"
+                    .into(),
+            );
         }
         if self.map.min_observations == 0 {
             return Err("map.min_observations must be at least 1".into());

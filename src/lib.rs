@@ -45,5 +45,6 @@ pub mod reflect;
 pub mod registration;
 pub mod rng;
 pub mod sensor;
+pub mod slam;
 
 pub use error::{Error, Result};

@@ -5,6 +5,7 @@ mod convert;
 mod demo;
 mod detect;
 mod eval;
+mod slam;
 
 use std::path::PathBuf;
 
@@ -24,6 +25,9 @@ struct Cli {
 enum Command {
     /// Classify every point of a 3DRef frame directory (N / G / R / O).
     Detect(detect::DetectArgs),
+    /// Reflection SLAM: poses and a plane map from the frames alone, then
+    /// classification with the estimated poses.
+    Slam(slam::SlamArgs),
     /// Score a predictions directory against the frames' labels.
     Eval(eval::EvalArgs),
     /// Rewrite frames as compact binary (or ascii) PLY, with their poses.
@@ -66,6 +70,7 @@ pub fn run() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Detect(args) => detect::run(args),
+        Command::Slam(args) => slam::run(args),
         Command::Eval(args) => eval::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Convert(args) => convert::run(args),

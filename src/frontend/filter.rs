@@ -155,33 +155,30 @@ impl CellCloud {
         Point3::new(p[0] as f64, p[1] as f64, p[2] as f64)
     }
 
-    /// The up to 8 grid neighbours of `cell` (ring ± 1, column ± 1, the
-    /// column wrapping at the seam), empty cells included; `None` outside
-    /// the ring range.
+    /// Call `f` with each of the up to 8 grid neighbours of `cell` (ring
+    /// ± 1, column ± 1, the column wrapping at the seam), empty cells
+    /// included, row by row.
     #[inline]
-    pub fn neighbours(&self, cell: usize) -> [Option<usize>; 8] {
-        let (r, c) = (cell / self.columns, cell % self.columns);
+    pub fn for_each_neighbour(&self, cell: usize, mut f: impl FnMut(usize)) {
         let cols = self.columns;
+        let (r, c) = (cell / cols, cell % cols);
         let left = if c == 0 { cols - 1 } else { c - 1 };
         let right = if c + 1 == cols { 0 } else { c + 1 };
-        let mut out = [None; 8];
-        let mut k = 0;
-        for dr in [-1isize, 0, 1] {
-            let rr = r as isize + dr;
-            if rr < 0 || rr >= self.rings as isize {
-                k += if dr == 0 { 2 } else { 3 };
-                continue;
-            }
-            let base = rr as usize * cols;
-            for cc in [left, c, right] {
-                if dr == 0 && cc == c {
-                    continue;
-                }
-                out[k] = Some(base + cc);
-                k += 1;
-            }
+        let row = r * cols;
+        if r > 0 {
+            let up = row - cols;
+            f(up + left);
+            f(up + c);
+            f(up + right);
         }
-        out
+        f(row + left);
+        f(row + right);
+        if r + 1 < self.rings {
+            let down = row + cols;
+            f(down + left);
+            f(down + c);
+            f(down + right);
+        }
     }
 }
 
@@ -250,8 +247,8 @@ mod tests {
         };
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         let cells = CellCloud::build(&frame, &scan, &[false]);
-        let n = cells.neighbours(0); // ring 0, column 0
-        let got: Vec<usize> = n.iter().flatten().copied().collect();
+        let mut got = Vec::new();
+        cells.for_each_neighbour(0, |c| got.push(c)); // ring 0, column 0
         assert_eq!(got, vec![599, 1, 600 + 599, 600, 601]);
     }
 }

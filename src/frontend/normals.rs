@@ -4,7 +4,7 @@
 //! column ± 1 whose points lie within a range-dependent gap of its point
 //! (so depth discontinuities are not smoothed over). The normal is the
 //! eigenvector of the smallest eigenvalue of the neighbourhood covariance,
-//! computed in closed form (no iterative eigen solver, no allocation), and
+//! computed without trigonometry or allocation (see [`smallest_eigen`]), and
 //! oriented towards the sensor. The surface variation
 //! `λ₀ / (λ₀ + λ₁ + λ₂)` (PCL's "curvature") is kept with it; region
 //! growing seeds from flat cells first.
@@ -81,45 +81,46 @@ impl OrganizedNormals {
 }
 
 /// Normal and surface variation of one non-empty cell.
+#[inline]
 fn cell_normal(cells: &CellCloud, cell: usize, params: &NormalParams) -> Option<([f32; 3], f32)> {
     let p = cells.xyz(cell);
     let gap = params.gap(cells.range(cell));
     let gap2 = gap * gap;
-    // Coordinates relative to the cell's point (well conditioned in f64).
-    let mut pts = [[0f64; 3]; 9];
-    let mut k = 1; // pts[0] = the cell itself, at the origin
-    for nb in cells.neighbours(cell).into_iter().flatten() {
-        if cells.point(nb).is_none() {
-            continue;
-        }
+    // Sums over the neighbourhood, in coordinates relative to the cell's
+    // point (well conditioned); the cell itself contributes zeros.
+    let (mut k, mut sx, mut sy, mut sz) = (1usize, 0f64, 0f64, 0f64);
+    let (mut xx, mut xy, mut xz, mut yy, mut yz, mut zz) = (0f64, 0f64, 0f64, 0f64, 0f64, 0f64);
+    cells.for_each_neighbour(cell, |nb| {
+        // Empty cells hold NaN, which fails the gap test.
         let q = cells.xyz(nb);
         let r = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
         if r[0] * r[0] + r[1] * r[1] + r[2] * r[2] <= gap2 {
-            pts[k] = [r[0] as f64, r[1] as f64, r[2] as f64];
+            let (x, y, z) = (r[0] as f64, r[1] as f64, r[2] as f64);
             k += 1;
+            sx += x;
+            sy += y;
+            sz += z;
+            xx += x * x;
+            xy += x * y;
+            xz += x * z;
+            yy += y * y;
+            yz += y * z;
+            zz += z * z;
         }
-    }
+    });
     if k < params.min_points.max(3) {
         return None;
     }
-    let pts = &pts[..k];
     let inv = 1.0 / k as f64;
-    let mut mean = [0f64; 3];
-    for q in pts {
-        for a in 0..3 {
-            mean[a] += q[a] * inv;
-        }
-    }
-    let mut cov = [0f64; 6]; // xx xy xz yy yz zz
-    for q in pts {
-        let (x, y, z) = (q[0] - mean[0], q[1] - mean[1], q[2] - mean[2]);
-        cov[0] += x * x;
-        cov[1] += x * y;
-        cov[2] += x * z;
-        cov[3] += y * y;
-        cov[4] += y * z;
-        cov[5] += z * z;
-    }
+    let (mx, my, mz) = (sx * inv, sy * inv, sz * inv);
+    let cov = [
+        xx - sx * mx,
+        xy - sx * my,
+        xz - sx * mz,
+        yy - sy * my,
+        yz - sy * mz,
+        zz - sz * mz,
+    ];
     let (lambda0, v, trace) = smallest_eigen(&cov)?;
     // Face the sensor: n·p < 0 for the point p seen from the origin.
     let dot = v[0] * p[0] as f64 + v[1] * p[1] as f64 + v[2] * p[2] as f64;
@@ -129,36 +130,43 @@ fn cell_normal(cells: &CellCloud, cell: usize, params: &NormalParams) -> Option<
 }
 
 /// Smallest eigenvalue, its unit eigenvector and the trace of the symmetric
-/// 3×3 matrix `[xx xy xz yy yz zz]`, in closed form (Smith's trigonometric
-/// eigenvalues, the eigenvector as the largest cross product of two rows of
-/// `A − λI`). `None` when the matrix is zero or the smallest eigenvalue is
-/// (nearly) repeated — a collinear or coincident neighbourhood has no
-/// normal.
+/// positive semi-definite 3×3 matrix `[xx xy xz yy yz zz]`, without
+/// trigonometry: the smallest root of the characteristic polynomial by
+/// Newton's method from 0 (the polynomial is concave and increasing there,
+/// so the iterates rise monotonically to the root), the eigenvector as the
+/// largest cross product of two rows of `A − λI`. `None` when the matrix is
+/// zero or the smallest eigenvalue is (nearly) repeated — a collinear or
+/// coincident neighbourhood has no normal.
 pub fn smallest_eigen(m: &[f64; 6]) -> Option<(f64, [f64; 3], f64)> {
     let [a00, a01, a02, a11, a12, a22] = *m;
     let trace = a00 + a11 + a22;
     if !(trace > 0.0) || !trace.is_finite() {
         return None;
     }
-    let q = trace / 3.0;
-    let p1 = a01 * a01 + a02 * a02 + a12 * a12;
-    let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
-    let p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1;
-    let p = (p2 / 6.0).sqrt();
-    if !(p > 1e-12 * trace) {
-        // A multiple of the identity: no preferred direction.
-        return None;
+    // det(A − λI) = −(λ³ − tr λ² + c λ − det).
+    let c = a00 * a11 - a01 * a01 + a00 * a22 - a02 * a02 + a11 * a22 - a12 * a12;
+    let det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02)
+        + a02 * (a01 * a12 - a11 * a02);
+    let mut lambda = 0f64;
+    for _ in 0..32 {
+        let p = ((lambda - trace) * lambda + c) * lambda - det;
+        let dp = (3.0 * lambda - 2.0 * trace) * lambda + c;
+        if !(dp > 0.0) {
+            break;
+        }
+        let step = p / dp;
+        lambda -= step;
+        if !(step.abs() > 1e-14 * trace) {
+            break;
+        }
     }
-    // det(B) / 2 with B = (A - qI) / p.
-    let det = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
-        + a02 * (a01 * a12 - b11 * a02);
-    let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
-    let phi = r.acos() / 3.0;
-    let largest = q + 2.0 * p * phi.cos();
-    let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
-    let middle = trace - largest - smallest;
+    let smallest = lambda.max(0.0);
+    // The other two roots: sum s = tr − λ₀, product q = c − λ₀ s.
+    let sum = trace - smallest;
+    let prod = c - smallest * sum;
+    let middle = 0.5 * (sum - (sum * sum - 4.0 * prod).max(0.0).sqrt());
     // A repeated smallest eigenvalue leaves the normal undefined.
-    if !(middle - smallest > 1e-6 * trace) {
+    if !(middle - smallest > 1e-4 * trace) {
         return None;
     }
     let r0 = [a00 - smallest, a01, a02];
@@ -172,17 +180,21 @@ pub fn smallest_eigen(m: &[f64; 6]) -> Option<(f64, [f64; 3], f64)> {
         ]
     };
     let norm2 = |v: &[f64; 3]| v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    let candidates = [cross(&r0, &r1), cross(&r0, &r2), cross(&r1, &r2)];
-    let best = candidates
-        .iter()
-        .max_by(|a, b| norm2(a).total_cmp(&norm2(b)))?;
-    let n2 = norm2(best);
+    let (c01, c02, c12) = (cross(&r0, &r1), cross(&r0, &r2), cross(&r1, &r2));
+    let (n01, n02, n12) = (norm2(&c01), norm2(&c02), norm2(&c12));
+    let (best, n2) = if n01 >= n02 && n01 >= n12 {
+        (c01, n01)
+    } else if n02 >= n12 {
+        (c02, n02)
+    } else {
+        (c12, n12)
+    };
     if !(n2 > 0.0) {
         return None;
     }
     let inv = 1.0 / n2.sqrt();
     Some((
-        smallest.max(0.0),
+        smallest,
         [best[0] * inv, best[1] * inv, best[2] * inv],
         trace,
     ))

@@ -100,28 +100,28 @@ pub fn grow_regions(
             let nc = normals.normals[cur];
             let g = gap.gap(cells.range(cur));
             let g2 = g * g;
-            for nb in cells.neighbours(cur).into_iter().flatten() {
+            cells.for_each_neighbour(cur, |nb| {
                 if label[nb] != u32::MAX || !usable(nb) {
-                    continue;
+                    return;
                 }
                 let q = cells.xyz(nb);
                 let r = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
                 if r[0] * r[0] + r[1] * r[1] + r[2] * r[2] > g2 {
-                    continue;
+                    return;
                 }
                 if (nc[0] * r[0] + nc[1] * r[1] + nc[2] * r[2]).abs() > max_dist {
-                    continue;
+                    return;
                 }
                 let nn = normals.normals[nb];
                 if nc[0] * nn[0] + nc[1] * nn[1] + nc[2] * nn[2] < cos_max {
-                    continue;
+                    return;
                 }
                 label[nb] = id;
                 members.push(nb);
                 if normals.curvature[nb] <= max_curv {
                     stack.push(nb);
                 }
-            }
+            });
         }
         if members.len() - start >= min_segment {
             ranges.push((start, members.len()));

@@ -130,4 +130,51 @@ impl PlaneMap {
             .iter()
             .filter(move |l| l.observations >= min_observations)
     }
+
+    /// An id no landmark of the map has (ids stay unique when landmarks are
+    /// pruned).
+    pub fn next_id(&self) -> usize {
+        self.landmarks.iter().map(|l| l.id + 1).max().unwrap_or(0)
+    }
+
+    /// Remove the landmarks that, `after` frames or more after they were
+    /// first seen, have fewer than `min_observations` observations
+    /// (spurious or dynamic planes); `frame` is the current frame. Returns
+    /// how many were removed.
+    pub fn prune(&mut self, frame: usize, after: usize, min_observations: usize) -> usize {
+        let before = self.landmarks.len();
+        self.landmarks.retain(|l| {
+            frame.saturating_sub(l.first_frame) < after || l.observations >= min_observations
+        });
+        before - self.landmarks.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::PlaneKind;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn pruning_drops_rare_landmarks_once_old_enough_and_ids_stay_unique() {
+        let obs = |frame: usize| PlaneObservation {
+            kind: PlaneKind::Ordinary,
+            plane: Plane::new(Vector3::x(), 1.0).unwrap(),
+            boundary: vec![],
+            frame,
+        };
+        let mut map = PlaneMap::new();
+        map.landmarks.push(Landmark::new(0, &obs(0)));
+        map.landmarks.push(Landmark::new(1, &obs(5)));
+        map.landmarks[1].observations = 3;
+        map.landmarks.push(Landmark::new(2, &obs(20)));
+        assert_eq!(map.prune(29, 30, 3), 0);
+        assert_eq!(map.prune(30, 30, 3), 1); // landmark 0: 30 frames, 1 observation
+        assert_eq!(
+            map.landmarks.iter().map(|l| l.id).collect::<Vec<_>>(),
+            vec![1, 2]
+        );
+        assert_eq!(map.next_id(), 3);
+    }
 }

@@ -14,6 +14,12 @@ pub trait MapMerger: Send + Sync {
     /// Fuse `obs` into `map`: update the landmark it matches or add a new one.
     /// Returns the landmark's index in `map.landmarks`.
     fn merge(&self, map: &mut PlaneMap, obs: &PlaneObservation) -> usize;
+
+    /// Fuse `obs` into the landmark at `index` of `map`, whose match was
+    /// decided elsewhere (the SLAM tracker's scan-to-map association).
+    /// An index out of range adds a new landmark instead. Returns the
+    /// landmark's index.
+    fn fuse(&self, map: &mut PlaneMap, index: usize, obs: &PlaneObservation) -> usize;
 }
 
 /// Matching and weighting thresholds of the paper's merger.
@@ -45,7 +51,8 @@ impl Default for MergeParams {
 /// wins); fuse by a weighted average of the plane parameters (new 1, stored 3
 /// after one observation, then its count, capped at 10) and the hull of the
 /// union of both boundaries projected onto the fused plane. Observations are
-/// matched only to landmarks of the same kind and orientation (planes face
+/// matched only to landmarks of the same kind (reflective, ordinary or
+/// ground: the same rules hold for all three) and orientation (planes face
 /// the sensors that saw them).
 #[derive(Debug, Clone, Default)]
 pub struct WeightedAverageMerger {
@@ -78,7 +85,7 @@ impl WeightedAverageMerger {
         a.union_hull(&b).area() <= a.area() + b.area()
     }
 
-    fn fuse(&self, l: &mut Landmark, obs: &PlaneObservation) {
+    fn fuse_landmark(&self, l: &mut Landmark, obs: &PlaneObservation) {
         let p = &self.params;
         let stored = if l.observations == 1 {
             p.second_weight
@@ -109,12 +116,26 @@ impl MapMerger for WeightedAverageMerger {
 
     fn merge(&self, map: &mut PlaneMap, obs: &PlaneObservation) -> usize {
         if let Some(k) = map.landmarks.iter().position(|l| self.matches(l, obs)) {
-            self.fuse(&mut map.landmarks[k], obs);
+            self.fuse_landmark(&mut map.landmarks[k], obs);
             return k;
         }
-        let id = map.landmarks.len();
+        let id = map.next_id();
         map.landmarks.push(Landmark::new(id, obs));
-        id
+        map.landmarks.len() - 1
+    }
+
+    fn fuse(&self, map: &mut PlaneMap, index: usize, obs: &PlaneObservation) -> usize {
+        match map.landmarks.get_mut(index) {
+            Some(l) => {
+                self.fuse_landmark(l, obs);
+                index
+            }
+            None => {
+                let id = map.next_id();
+                map.landmarks.push(Landmark::new(id, obs));
+                map.landmarks.len() - 1
+            }
+        }
     }
 }
 
@@ -160,6 +181,30 @@ mod tests {
         back.plane = back.plane.flipped();
         assert_eq!(m.merge(&mut map, &back), 3);
         assert_eq!(map.selected(2).count(), 1);
+    }
+
+    #[test]
+    fn ordinary_and_ground_landmarks_follow_the_same_rules_and_never_mix_kinds() {
+        let m = WeightedAverageMerger::default();
+        let mut map = PlaneMap::new();
+        let mut wall = obs(0.0, 2.0, 5.0, 0);
+        wall.kind = PlaneKind::Ordinary;
+        assert_eq!(m.merge(&mut map, &wall), 0);
+        let mut again = obs(1.0, 3.0, 5.02, 1);
+        again.kind = PlaneKind::Ordinary;
+        assert_eq!(m.merge(&mut map, &again), 0);
+        // The same plane seen as glass is another landmark.
+        assert_eq!(m.merge(&mut map, &obs(0.0, 2.0, 5.0, 2)), 1);
+        let mut ground = obs(0.0, 2.0, 5.0, 3);
+        ground.kind = PlaneKind::Ground;
+        assert_eq!(m.merge(&mut map, &ground), 2);
+        // A decided association fuses even without hull overlap.
+        let mut far = obs(10.0, 12.0, 5.0, 4);
+        far.kind = PlaneKind::Ordinary;
+        assert_eq!(m.fuse(&mut map, 0, &far), 0);
+        assert_eq!(map.landmarks[0].observations, 3);
+        assert_eq!(m.fuse(&mut map, 99, &far), 3);
+        assert_eq!(map.landmarks[3].id, 3);
     }
 
     #[test]

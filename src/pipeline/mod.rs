@@ -7,11 +7,13 @@ pub mod plane_optimized;
 pub mod registry;
 pub mod sequence;
 pub mod single_scan;
+pub mod slam;
 pub mod timings;
 
 pub use plane_optimized::{run_plane_optimized, PlaneOptimizedOutput};
 pub use sequence::Sequence;
 pub use single_scan::run_single_scan;
+pub use slam::{run_slam, SlamOutput};
 pub use timings::StageTimings;
 
 use crate::classify::Class;

@@ -3,8 +3,10 @@
 
 use crate::classify::{Classifier, PlaneMapClassifier, SingleScanClassifier};
 use crate::config::{Config, MergerName};
+use crate::frontend::{ExtractorName, PlaneExtractor, RegionGrowingExtractor};
 use crate::map::{MapMerger, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
+use crate::registration::{AcceptAll, GroundTripleRansac, MismatchRejector, RejectorName};
 use crate::sensor::SensorModel;
 
 /// The reflective detector named in `[detector]`.
@@ -29,6 +31,21 @@ pub fn plane_map_classifier(config: &Config) -> PlaneMapClassifier {
 pub fn merger(config: &Config) -> Box<dyn MapMerger> {
     match config.map.merger {
         MergerName::WeightedAverage => Box::new(WeightedAverageMerger::new(config.map.merge)),
+    }
+}
+
+/// The plane extractor named in `[extractor] name`.
+pub fn extractor(config: &Config) -> Box<dyn PlaneExtractor> {
+    match config.extractor.name {
+        ExtractorName::RegionGrowing => Box::new(RegionGrowingExtractor::new(config.extractor)),
+    }
+}
+
+/// The mismatch rejector named in `[slam.rejector] name`.
+pub fn rejector(config: &Config) -> Box<dyn MismatchRejector> {
+    match config.slam.rejector.name {
+        RejectorName::GroundTripleRansac => Box::new(GroundTripleRansac::new(config.slam.rejector)),
+        RejectorName::None => Box::new(AcceptAll::new(config.slam.rejector)),
     }
 }
 

@@ -1,0 +1,188 @@
+//! `specular slam`: Reflection SLAM on a frame directory.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use serde_json::json;
+use specular::eval::trajectory_error;
+use specular::io::{self, StampedPose};
+use specular::pipeline::slam::classify_with_poses;
+use specular::pipeline::{run_plane_optimized, run_slam, Sequence, StageTimings};
+
+use super::load_config;
+
+/// Arguments of `slam`.
+#[derive(Args, Debug)]
+pub struct SlamArgs {
+    /// Directory of 3DRef frames (`<timestamp>.ply`).
+    #[arg(long)]
+    pub frames: PathBuf,
+    /// Output directory (poses.txt, planes.json, frames.csv, predictions/,
+    /// metrics.json, config.toml).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// True poses (TUM, `T_world_sensor`): the first aligns the estimate's
+    /// world frame, all of them score the trajectory.
+    #[arg(long)]
+    pub gt_poses: Option<PathBuf>,
+    /// Configuration: built-in name (default, paper) or TOML file.
+    #[arg(long, default_value = "default")]
+    pub config: String,
+    /// Skip the classification pass (trajectory only).
+    #[arg(long)]
+    pub no_classify: bool,
+    /// Print milliseconds per frame for every stage.
+    #[arg(long)]
+    pub timings: bool,
+}
+
+/// Run `slam`.
+pub fn run(args: SlamArgs) -> Result<()> {
+    let config = load_config(&args.config)?;
+    let mut load_timings = StageTimings::default();
+    let mut sequence = Sequence::load(
+        &args.frames,
+        args.gt_poses.as_deref(),
+        config.input.pose_tolerance,
+        &mut load_timings,
+    )?;
+    if sequence.is_empty() {
+        anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
+    }
+    let truth = sequence.poses.clone();
+    let origin = truth.as_ref().map(|t| t[0]);
+    let slam = run_slam(&sequence, &config, origin)?;
+    let out = &args.out;
+
+    // Poses, map, per-frame report.
+    let stamped: Vec<StampedPose> = sequence
+        .frames
+        .iter()
+        .zip(&slam.poses)
+        .map(|(f, p)| StampedPose {
+            stamp: f.stamp,
+            pose: *p,
+        })
+        .collect();
+    io::write_tum(&out.join("poses.txt"), &stamped)?;
+    let names: Vec<String> = sequence.frames.iter().map(|f| f.name.clone()).collect();
+    let records: Vec<_> = slam
+        .map
+        .landmarks
+        .iter()
+        .map(|l| l.record(&l.bounded(), &names))
+        .collect();
+    io::write_planes(&out.join("planes.json"), &records)?;
+    let mut csv = String::from(
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,landmarks,time_ms\n",
+    );
+    for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
+        writeln!(
+            csv,
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{:.3}",
+            names[r.index],
+            r.planes,
+            r.frame_matches,
+            r.frame_inliers,
+            r.map_matches,
+            r.inliers,
+            r.degeneracy.count(),
+            r.degeneracy.describe(&r.pose),
+            r.degeneracy.min_eigenvalue(),
+            r.fallback,
+            r.landmarks,
+            t.as_secs_f64() * 1e3
+        )?;
+    }
+    io::write_atomic(&out.join("frames.csv"), |w| {
+        std::io::Write::write_all(w, csv.as_bytes())
+    })?;
+    io::write_atomic(&out.join("config.toml"), |w| {
+        std::io::Write::write_all(w, config.to_toml().as_bytes())
+    })?;
+
+    // Trajectory error.
+    let trajectory = match &truth {
+        Some(t) => Some(trajectory_error(&slam.poses, t, config.slam.rpe_segment)?),
+        None => None,
+    };
+    let degenerate = slam
+        .reports
+        .iter()
+        .filter(|r| r.degeneracy.is_degenerate())
+        .count();
+    let fallback = slam.reports.iter().filter(|r| r.fallback).count();
+    let total: f64 = slam.frame_times.iter().map(|d| d.as_secs_f64()).sum();
+    let fps = slam.reports.len() as f64 / total.max(1e-12);
+
+    // Classification with the estimated poses (and, for comparison, with the
+    // true ones).
+    let labelled = sequence.frames.iter().all(|f| f.has_labels);
+    let mut classification = None;
+    let mut reference = None;
+    if !args.no_classify {
+        let estimated = classify_with_poses(&mut sequence, slam.poses.clone(), &config)?;
+        let pred_dir = out.join("predictions");
+        for f in &estimated.run.frames {
+            let ids: Vec<u8> = f.classes.iter().map(|c| c.id()).collect();
+            io::write_labels(&pred_dir.join(format!("{}.label", f.name)), &ids)?;
+        }
+        if labelled {
+            classification = estimated.run.confusion(&sequence).map(|c| c.metrics());
+            if truth.is_some() {
+                let with_truth = run_plane_optimized(&sequence, &config)?;
+                reference = with_truth.run.confusion(&sequence).map(|c| c.metrics());
+            }
+        }
+    }
+    let metrics = json!({
+        "frames": slam.reports.len(),
+        "degenerate_frames": degenerate,
+        "fallback_frames": fallback,
+        "landmarks": slam.map.landmarks.len(),
+        "frames_per_second": fps,
+        "trajectory": trajectory,
+        "classification": classification,
+        "classification_true_poses": reference,
+    });
+    let text = serde_json::to_string_pretty(&metrics).context("serialising metrics")?;
+    io::write_atomic(&out.join("metrics.json"), |w| {
+        std::io::Write::write_all(w, text.as_bytes())
+    })?;
+
+    println!(
+        "{} frames: {} landmarks, {} degenerate frames, {} on the motion model alone; {:.1} frames/s (front end + tracking, {} threads)",
+        slam.reports.len(),
+        slam.map.landmarks.len(),
+        degenerate,
+        fallback,
+        fps,
+        rayon::current_num_threads()
+    );
+    println!(
+        "poses.txt, planes.json, frames.csv, metrics.json in {}",
+        out.display()
+    );
+    if let Some(t) = &trajectory {
+        println!("trajectory: {}", t.summary());
+    }
+    if let Some(m) = &classification {
+        println!("classification with the estimated poses:");
+        print!("{}", m.table());
+    }
+    if let Some(m) = &reference {
+        println!(
+            "plane-optimized with the true poses: mIoU {:.2}, accuracy {:.2}",
+            m.miou, m.accuracy
+        );
+    }
+    if args.timings {
+        let mut t = slam.timings.clone();
+        t.merge(&load_timings);
+        t.frames = slam.reports.len();
+        print!("{}", t.table());
+    }
+    Ok(())
+}

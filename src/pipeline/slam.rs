@@ -1,0 +1,151 @@
+//! The paper's second pipeline, "Reflection SLAM": poses from the planes
+//! themselves, then the same classification as the plane-optimized
+//! pipeline with the estimated poses.
+//!
+//! 1. Front end, per frame and in parallel (it does not depend on the
+//!    pose): organize the scan, detect the reflective planes, extract the
+//!    ground and ordinary planes from the filtered cloud.
+//! 2. Tracking, in timestamp order ([`Tracker`]): predict, register to the
+//!    previous frame, register to the map, update the map.
+//! 3. Classification: the plane-optimized pipeline run with the estimated
+//!    poses ([`classify_with_poses`]).
+
+use std::time::{Duration, Instant};
+
+use nalgebra::Isometry3;
+use rayon::prelude::*;
+
+use super::registry::{detector, extractor, frame_seed, merger, rejector};
+use super::single_scan::check_frame;
+use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
+use crate::cloud::Frame;
+use crate::config::Config;
+use crate::frontend::{reflective_planes, FramePlane, PlaneExtractor};
+use crate::map::PlaneMap;
+use crate::reflect::ReflectiveDetector;
+use crate::sensor::{OrganizedScan, SensorModel};
+use crate::slam::{FrameReport, Tracker};
+use crate::Result;
+
+/// What the SLAM pipeline produces.
+#[derive(Debug, Clone)]
+pub struct SlamOutput {
+    /// Estimated `T_world_sensor` per frame, sequence order.
+    pub poses: Vec<Isometry3<f64>>,
+    /// The final plane map (ordinary, ground and reflective landmarks).
+    pub map: PlaneMap,
+    /// One report per frame.
+    pub reports: Vec<FrameReport>,
+    /// Processing time per frame: front end plus tracking (CPU time).
+    pub frame_times: Vec<Duration>,
+    /// Time per stage.
+    pub timings: StageTimings,
+}
+
+/// Seed of the extractor's RANSAC for a frame (distinct from the
+/// detector's).
+fn extractor_seed(seed: u64, name: &str) -> u64 {
+    frame_seed(seed ^ 0x9e37_79b9_7f4a_7c15, name)
+}
+
+/// The planes of one frame (sensor frame): ground and ordinary planes from
+/// `extractor`, then the reflective planes of `detector`. Also returns the
+/// time spent per stage.
+pub fn frame_planes(
+    frame: &Frame,
+    sensor: &SensorModel,
+    detector: &dyn ReflectiveDetector,
+    extractor: &dyn PlaneExtractor,
+    seed: u64,
+) -> Result<(Vec<FramePlane>, StageTimings)> {
+    let mut t = StageTimings::default();
+    let start = Instant::now();
+    let scan = OrganizedScan::build(frame, sensor)?;
+    t.add("pair", start.elapsed());
+    let start = Instant::now();
+    let detection = detector.detect(frame, &scan, frame_seed(seed, &frame.name));
+    t.add("detect", start.elapsed());
+    let start = Instant::now();
+    let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
+    planes.extend(reflective_planes(frame, &detection));
+    t.add("extract", start.elapsed());
+    t.frames = 1;
+    Ok((planes, t))
+}
+
+/// Run Reflection SLAM over `sequence` (its poses, if any, are not used).
+/// The first frame gets pose `origin` (identity when `None`).
+pub fn run_slam(
+    sequence: &Sequence,
+    config: &Config,
+    origin: Option<Isometry3<f64>>,
+) -> Result<SlamOutput> {
+    let wall = Instant::now();
+    let sensor = SensorModel::resolve(&config.sensor)?;
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
+    let detector = detector(config, &sensor);
+    let extractor = extractor(config);
+
+    // 1. Front end, in parallel.
+    let front: Vec<(Vec<FramePlane>, StageTimings)> = sequence
+        .frames
+        .par_iter()
+        .map(|f| {
+            frame_planes(
+                f,
+                &sensor,
+                detector.as_ref(),
+                extractor.as_ref(),
+                config.seed,
+            )
+        })
+        .collect::<Result<_>>()?;
+
+    // 2. Tracking, in order.
+    let mut timings = StageTimings::default();
+    let mut tracker = Tracker::new(
+        config.slam,
+        rejector(config),
+        merger(config),
+        origin.unwrap_or_else(Isometry3::identity),
+    );
+    let mut poses = Vec::with_capacity(sequence.len());
+    let mut reports = Vec::with_capacity(sequence.len());
+    let mut frame_times = Vec::with_capacity(sequence.len());
+    for (k, (planes, t)) in front.into_iter().enumerate() {
+        timings.merge(&t);
+        let start = Instant::now();
+        let seed = frame_seed(config.seed ^ 0x51a4, &sequence.frames[k].name);
+        let report = tracker.track(planes, seed);
+        let track = start.elapsed();
+        timings.add("track", track);
+        frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);
+        poses.push(report.pose);
+        reports.push(report);
+    }
+    timings.frames = sequence.len();
+    timings.wall = wall.elapsed();
+    Ok(SlamOutput {
+        poses,
+        map: tracker.into_map(),
+        reports,
+        frame_times,
+        timings,
+    })
+}
+
+/// Classify every frame with the plane-optimized pipeline using `poses`
+/// (e.g. the SLAM estimate) instead of the sequence's own poses, which are
+/// restored afterwards.
+pub fn classify_with_poses(
+    sequence: &mut Sequence,
+    poses: Vec<Isometry3<f64>>,
+    config: &Config,
+) -> Result<PlaneOptimizedOutput> {
+    let saved = sequence.poses.replace(poses);
+    let out = run_plane_optimized(sequence, config);
+    sequence.poses = saved;
+    out
+}

@@ -1,0 +1,242 @@
+//! The tracking step: one frame's planes in, its pose and the updated map
+//! out.
+
+use nalgebra::Isometry3;
+use serde::{Deserialize, Serialize};
+
+use super::association::{associate, MapMatchParams};
+use super::motion::{MotionModel, MotionModelName};
+use crate::frontend::FramePlane;
+use crate::io::PlaneKind;
+use crate::map::{MapMerger, PlaneMap};
+use crate::registration::{
+    match_planes, register, Degeneracy, GaussNewtonParams, MatchCriteria, MismatchRejector,
+    RejectorParams,
+};
+
+/// Reflection SLAM settings (`[slam]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SlamParams {
+    /// The motion model that predicts each pose.
+    pub motion_model: MotionModelName,
+    /// Register each frame to the previous one before the map (the paper);
+    /// without it the prediction alone starts scan-to-map.
+    pub frame_to_frame: bool,
+    /// Reflective planes take part in registration (the paper: yes).
+    pub use_reflective: bool,
+    /// Frame-to-frame matching criteria.
+    pub frame_matching: MatchCriteria,
+    /// Scan-to-map matching.
+    pub map_matching: MapMatchParams,
+    /// Mismatch rejection.
+    pub rejector: RejectorParams,
+    /// Gauss–Newton refinement and the degeneracy threshold.
+    pub gauss_newton: GaussNewtonParams,
+    /// Landmarks are pruned once this many frames old ...
+    pub prune_after: usize,
+    /// ... when they have fewer observations than this.
+    pub prune_min_observations: usize,
+    /// Segment length of the relative pose error, m.
+    pub rpe_segment: f64,
+}
+
+impl Default for SlamParams {
+    fn default() -> Self {
+        Self {
+            motion_model: MotionModelName::ConstantVelocity,
+            frame_to_frame: true,
+            use_reflective: true,
+            frame_matching: MatchCriteria::default(),
+            map_matching: MapMatchParams::default(),
+            rejector: RejectorParams::default(),
+            gauss_newton: GaussNewtonParams::default(),
+            prune_after: 30,
+            prune_min_observations: 3,
+            rpe_segment: 1.0,
+        }
+    }
+}
+
+/// What happened in one tracking step (a row of `frames.csv`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameReport {
+    /// Index of the frame in the sequence.
+    pub index: usize,
+    /// Planes of the frame (ground, ordinary, reflective).
+    pub planes: usize,
+    /// Candidate pairs with the previous frame.
+    pub frame_matches: usize,
+    /// Of those, the inliers of the frame-to-frame registration.
+    pub frame_inliers: usize,
+    /// Frame planes associated with landmarks.
+    pub map_matches: usize,
+    /// Of those, the inliers of the scan-to-map registration.
+    pub inliers: usize,
+    /// Eigen-analysis of the final scan-to-map information matrix.
+    pub degeneracy: Degeneracy,
+    /// The pose came from the motion model alone (no registration).
+    pub fallback: bool,
+    /// Landmarks in the map after the update.
+    pub landmarks: usize,
+    /// Landmarks pruned in this step.
+    pub pruned: usize,
+    /// The estimated pose `T_world_sensor`.
+    pub pose: Isometry3<f64>,
+}
+
+/// Scan-to-map tracking over a sequence of frames' planes.
+///
+/// Per frame: predict the pose (motion model); register the frame's planes
+/// to the previous frame's (frame-to-frame, the paper's initial pose);
+/// associate them with the map's landmarks at that pose and register
+/// against the map (RANSAC + Gauss–Newton, unobservable directions kept
+/// from the prediction); fuse the observations into the map; prune rare
+/// landmarks.
+pub struct Tracker {
+    params: SlamParams,
+    rejector: Box<dyn MismatchRejector>,
+    merger: Box<dyn MapMerger>,
+    map: PlaneMap,
+    motion: MotionModel,
+    previous: Option<(Vec<FramePlane>, Isometry3<f64>)>,
+    frames: usize,
+    origin: Isometry3<f64>,
+}
+
+impl Tracker {
+    /// A tracker whose first frame gets pose `origin` (identity defines the
+    /// world frame; a first true pose aligns the outputs with the truth).
+    pub fn new(
+        params: SlamParams,
+        rejector: Box<dyn MismatchRejector>,
+        merger: Box<dyn MapMerger>,
+        origin: Isometry3<f64>,
+    ) -> Self {
+        Self {
+            params,
+            rejector,
+            merger,
+            map: PlaneMap::new(),
+            motion: MotionModel::new(params.motion_model),
+            previous: None,
+            frames: 0,
+            origin,
+        }
+    }
+
+    /// The map so far.
+    pub fn map(&self) -> &PlaneMap {
+        &self.map
+    }
+
+    /// The final map.
+    pub fn into_map(self) -> PlaneMap {
+        self.map
+    }
+
+    /// Track one frame given its planes (sensor frame); `seed` makes the
+    /// randomised parts deterministic.
+    pub fn track(&mut self, planes: Vec<FramePlane>, seed: u64) -> FrameReport {
+        let p = self.params;
+        let index = self.frames;
+        self.frames += 1;
+        let usable: Vec<FramePlane> = planes
+            .iter()
+            .filter(|fp| p.use_reflective || fp.kind != PlaneKind::Reflective)
+            .cloned()
+            .collect();
+        let inlier_cos = p.rejector.inlier_cos();
+        let inlier_offset = p.rejector.inlier_offset;
+        let mut report = FrameReport {
+            index,
+            planes: planes.len(),
+            frame_matches: 0,
+            frame_inliers: 0,
+            map_matches: 0,
+            inliers: 0,
+            degeneracy: Degeneracy::none_observable(p.gauss_newton.degeneracy_threshold),
+            fallback: false,
+            landmarks: 0,
+            pruned: 0,
+            pose: self.origin,
+        };
+
+        // 1. Predict (the first frame defines the world frame).
+        let mut matched: Vec<Option<usize>> = vec![None; usable.len()];
+        let pose = match (self.motion.predict(), &self.previous) {
+            (Some(predicted), Some((prev_planes, prev_pose))) => {
+                // 2. Frame-to-frame registration: the initial global pose.
+                let mut initial = predicted;
+                if p.frame_to_frame {
+                    let rel_prior = prev_pose.inverse() * predicted;
+                    let pairs = match_planes(&usable, prev_planes, &rel_prior, &p.frame_matching);
+                    report.frame_matches = pairs.len();
+                    if let Some(reg) = register(
+                        &pairs,
+                        &rel_prior,
+                        self.rejector.as_ref(),
+                        &p.gauss_newton,
+                        inlier_cos,
+                        inlier_offset,
+                        seed,
+                    ) {
+                        report.frame_inliers = reg.inliers.len();
+                        initial = prev_pose * reg.pose;
+                    }
+                }
+                // 3. Scan-to-map registration.
+                let pairs = associate(&usable, &initial, &self.map, &p.map_matching);
+                report.map_matches = pairs.len();
+                match register(
+                    &pairs,
+                    &initial,
+                    self.rejector.as_ref(),
+                    &p.gauss_newton,
+                    inlier_cos,
+                    inlier_offset,
+                    seed ^ 0x5eed,
+                ) {
+                    Some(reg) => {
+                        report.inliers = reg.inliers.len();
+                        for &k in &reg.inliers {
+                            matched[pairs[k].source_index].get_or_insert(pairs[k].target_index);
+                        }
+                        report.degeneracy = reg.refinement.degeneracy;
+                        reg.pose
+                    }
+                    None => {
+                        report.fallback = true;
+                        initial
+                    }
+                }
+            }
+            _ => self.origin,
+        };
+
+        // 4. Map update: matched planes fuse into their landmark, the others
+        //    go through the merger's own matching (or become landmarks).
+        for (fp, m) in usable.iter().zip(&matched) {
+            let obs = fp.observation(&pose, index);
+            match m {
+                Some(j) => self.merger.fuse(&mut self.map, *j, &obs),
+                None => self.merger.merge(&mut self.map, &obs),
+            };
+        }
+        if !p.use_reflective {
+            for fp in planes.iter().filter(|fp| fp.kind == PlaneKind::Reflective) {
+                self.merger
+                    .merge(&mut self.map, &fp.observation(&pose, index));
+            }
+        }
+        report.pruned = self
+            .map
+            .prune(index, p.prune_after, p.prune_min_observations);
+        report.landmarks = self.map.landmarks.len();
+
+        self.motion.update(pose);
+        self.previous = Some((usable, pose));
+        report.pose = pose;
+        report
+    }
+}
