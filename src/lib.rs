@@ -39,5 +39,6 @@ pub mod pipeline;
 pub mod reflect;
 pub mod rng;
 pub mod sensor;
+pub mod sim;
 
 pub use error::{Error, Result};
