@@ -276,6 +276,7 @@ mod tests {
         Material {
             kind: MaterialKind::Glass,
             diffuse: 0.02,
+            lobe: 1.0,
             echo_peak: 1.0,
             echo_width: 3f64.to_radians(),
             reflectance: 0.1,
@@ -315,6 +316,7 @@ mod tests {
         let mirror = Material {
             kind: MaterialKind::Mirror,
             diffuse: 0.01,
+            lobe: 1.0,
             echo_peak: 0.0,
             echo_width: 1.0,
             reflectance: 0.95,

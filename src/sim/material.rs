@@ -9,7 +9,9 @@
 //!   other reflective surfaces add a sharp specular peak
 //!   `p · exp(-(θ/θ₀)²)` that is strong only near normal incidence (the
 //!   intensity peak of the paper's "Reflection Model of Different
-//!   Materials") on top of a weak diffuse part (dust, coating).
+//!   Materials") on top of a weak broad lobe `ρ cosⁿ θ` (dust, coating haze;
+//!   `n = 1` is Lambertian, larger `n` makes glass vanish sooner at oblique
+//!   incidence, as the paper describes).
 //! - **specular reflectance** `R(θ)`: the fraction of the power continuing
 //!   along the mirrored direction. Dielectrics (glass, coated panels) follow
 //!   Schlick's approximation of the Fresnel equations,
@@ -72,8 +74,10 @@ impl MaterialKind {
 pub struct Material {
     /// Class, which decides the label of the surface echo.
     pub kind: MaterialKind,
-    /// Lambertian reflectivity `ρ` of the surface echo (0..1).
+    /// Reflectivity `ρ` of the broad lobe of the surface echo (0..1).
     pub diffuse: f64,
+    /// Exponent `n` of the broad lobe `ρ cosⁿ θ` (1: Lambertian).
+    pub lobe: f64,
     /// Height `p` of the specular peak of the surface echo at normal
     /// incidence, reflectivity units (may exceed 1: the peak is focused).
     pub echo_peak: f64,
@@ -94,6 +98,7 @@ impl Material {
         Self {
             kind: MaterialKind::Diffuse,
             diffuse: rho,
+            lobe: 1.0,
             echo_peak: 0.0,
             echo_width: 1.0,
             reflectance: 0.0,
@@ -108,7 +113,11 @@ impl Material {
     #[inline]
     pub fn surface_echo(&self, cos_theta: f64) -> f64 {
         let c = cos_theta.clamp(0.0, 1.0);
-        let mut s = self.diffuse * c;
+        let mut s = if self.lobe == 1.0 {
+            self.diffuse * c
+        } else {
+            self.diffuse * c.powf(self.lobe)
+        };
         if self.echo_peak > 0.0 {
             let theta = c.acos();
             let x = theta / self.echo_width;
@@ -157,6 +166,7 @@ mod tests {
         Material {
             kind: MaterialKind::Glass,
             diffuse: 0.03,
+            lobe: 8.0,
             echo_peak: 1.0,
             echo_width: 4f64.to_radians(),
             reflectance: 0.1,

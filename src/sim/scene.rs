@@ -9,6 +9,7 @@
 //! model = "pandar_qt64"      # built-in name, or a sensor TOML path relative to the scene
 //! range_noise = 0.01         # Gaussian range noise sigma, metres
 //! crop_range = 25.0          # drop returns farther than this (3DRef: 25 m); optional
+//! blind_sector_deg = [157.5, 202.5]  # azimuths hidden by the operator; optional
 //!
 //! [trajectory]
 //! waypoints = [[1.0, 1.0, 1.2], [8.0, 1.0, 1.2]]
@@ -71,6 +72,24 @@ pub struct SensorSetup {
     pub intensity_gain: f64,
     /// Echoes weaker than this intensity are not detected.
     pub detection_threshold: f64,
+    /// Azimuth sector `[from, to]` (degrees in the sensor frame,
+    /// counter-clockwise from `from` to `to`) hidden by the platform or the
+    /// operator: beams there return nothing, as in 3DRef where the person
+    /// pushing the trolley was removed.
+    pub blind_sector_deg: Option<[f64; 2]>,
+}
+
+impl SensorSetup {
+    /// Whether a sensor-frame azimuth (degrees) lies in the blind sector.
+    pub fn is_blind(&self, azimuth_deg: f64) -> bool {
+        match self.blind_sector_deg {
+            Some([from, to]) => {
+                let width = (to - from).rem_euclid(360.0);
+                (azimuth_deg - from).rem_euclid(360.0) <= width
+            }
+            None => false,
+        }
+    }
 }
 
 /// A material with the name the scene gave it.
@@ -202,6 +221,7 @@ struct SensorFile {
     intensity_gain: f64,
     #[serde(default = "default_threshold")]
     detection_threshold: f64,
+    blind_sector_deg: Option<[f64; 2]>,
 }
 
 #[derive(Deserialize)]
@@ -236,6 +256,8 @@ enum MaterialFile {
         echo_width_deg: f64,
         #[serde(default = "glass_dirt")]
         echo_diffuse: f64,
+        #[serde(default = "glass_lobe")]
+        echo_lobe: f64,
     },
     Mirror {
         #[serde(default = "mirror_r")]
@@ -246,6 +268,8 @@ enum MaterialFile {
         echo_width_deg: f64,
         #[serde(default = "mirror_dirt")]
         echo_diffuse: f64,
+        #[serde(default = "one")]
+        echo_lobe: f64,
     },
     OtherReflective {
         #[serde(default = "other_rho")]
@@ -266,7 +290,10 @@ fn glass_t() -> f64 {
     0.85
 }
 fn glass_dirt() -> f64 {
-    0.02
+    0.03
+}
+fn glass_lobe() -> f64 {
+    8.0
 }
 fn mirror_r() -> f64 {
     0.9
@@ -374,6 +401,13 @@ impl MaterialFile {
                 Err(format!("echo_peak must be in 0..100, got {v}"))
             }
         };
+        let lobe = |v: f64| -> BuildResult<f64> {
+            if (1.0..=1000.0).contains(&v) {
+                Ok(v)
+            } else {
+                Err(format!("echo_lobe must be in 1..1000, got {v}"))
+            }
+        };
         let width = |v: f64| -> BuildResult<f64> {
             if v > 0.0 && v <= 90.0 {
                 Ok(v.to_radians())
@@ -391,6 +425,7 @@ impl MaterialFile {
                 echo_peak,
                 echo_width_deg,
                 echo_diffuse,
+                echo_lobe,
             } => {
                 let r = unit("reflectance", reflectance)?;
                 let t = unit("transmittance", transmittance)?;
@@ -402,6 +437,7 @@ impl MaterialFile {
                 Material {
                     kind: MaterialKind::Glass,
                     diffuse: unit("echo_diffuse", echo_diffuse)?,
+                    lobe: lobe(echo_lobe)?,
                     echo_peak: peak(echo_peak)?,
                     echo_width: width(echo_width_deg)?,
                     reflectance: r,
@@ -414,9 +450,11 @@ impl MaterialFile {
                 echo_peak,
                 echo_width_deg,
                 echo_diffuse,
+                echo_lobe,
             } => Material {
                 kind: MaterialKind::Mirror,
                 diffuse: unit("echo_diffuse", echo_diffuse)?,
+                lobe: lobe(echo_lobe)?,
                 echo_peak: peak(echo_peak)?,
                 echo_width: width(echo_width_deg)?,
                 reflectance: unit("reflectance", reflectance)?,
@@ -439,6 +477,7 @@ impl MaterialFile {
                 Material {
                     kind: MaterialKind::OtherReflective,
                     diffuse: rho,
+                    lobe: 1.0,
                     echo_peak: peak(echo_peak)?,
                     echo_width: width(echo_width_deg)?,
                     reflectance: r,
@@ -762,7 +801,13 @@ impl SensorFile {
                 self.detection_threshold
             ));
         }
+        if let Some(b) = self.blind_sector_deg {
+            if !b.iter().all(|x| x.is_finite()) {
+                return bad("blind_sector_deg must be two finite angles".into());
+            }
+        }
         Ok(SensorSetup {
+            blind_sector_deg: self.blind_sector_deg,
             model,
             range_noise: self.range_noise,
             max_range,
@@ -811,6 +856,20 @@ mod tests {
             .unwrap();
         assert_eq!(s.material_of(west).kind, MaterialKind::Glass);
         assert_eq!(s.frames, 21);
+    }
+
+    #[test]
+    fn blind_sector_wraps_around_the_seam() {
+        let text = MINIMAL.replace(
+            "model = \"pandar_qt64\"",
+            "model = \"pandar_qt64\"\nblind_sector_deg = [160.0, -160.0]",
+        );
+        let s = Scene::from_toml(&text, Path::new("min.toml")).unwrap();
+        assert!(s.sensor.is_blind(180.0) && s.sensor.is_blind(-180.0));
+        assert!(s.sensor.is_blind(165.0) && s.sensor.is_blind(-165.0));
+        assert!(!s.sensor.is_blind(0.0) && !s.sensor.is_blind(150.0));
+        let open = Scene::from_toml(MINIMAL, Path::new("min.toml")).unwrap();
+        assert!(!open.sensor.is_blind(180.0));
     }
 
     #[test]

@@ -55,8 +55,8 @@ pub fn frame_seed(seed: u64, k: usize) -> u64 {
 pub struct Simulator {
     scene: Scene,
     tracer: BeamTracer,
-    /// Unit beam directions in the sensor frame, column-major
-    /// (`col * rings + ring`).
+    /// Unit beam directions in the sensor frame, column-major (all rings
+    /// of a column in turn), without the columns of the blind sector.
     beams: Vec<DVec3>,
     min_signal: f64,
     period_us: u64,
@@ -79,6 +79,9 @@ impl Simulator {
         let rings = model.rings();
         let mut beams = Vec::with_capacity(rings * model.columns);
         for col in 0..model.columns {
+            if sensor.is_blind(model.column_azimuth_deg(col)) {
+                continue;
+            }
             for ring in 0..rings {
                 let d = model.beam_direction(ring, col);
                 beams.push(DVec3::new(d.x, d.y, d.z));
