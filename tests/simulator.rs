@@ -198,7 +198,7 @@ fn glass_surface_echo_is_strongest_at_normal_incidence() {
     let scene = Scene::from_toml(PANE, Path::new("pane.toml")).unwrap();
     let sim = Simulator::new(&scene);
     let hit = DVec3::new(5.0, 6.0, 1.5);
-    for distance in [4.0, 12.0] {
+    for distance in [4.0, 20.0] {
         let mut last = f64::INFINITY;
         let mut detected = Vec::new();
         for deg in 0..85 {
