@@ -544,3 +544,36 @@ fn the_command_writes_identical_bytes_for_the_same_seed() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("another run"));
 }
+
+#[test]
+fn builtin_scenes_build_and_benchmark_scenes_are_long_enough() {
+    for name in specular::sim::builtin::names() {
+        let scene = Scene::resolve(name).unwrap();
+        assert_eq!(scene.name, name);
+        assert!(!scene.description.is_empty(), "{name}");
+    }
+    for name in ["office", "corridor", "mirror-room", "lobby"] {
+        let frames = Scene::resolve(name).unwrap().frames;
+        assert!(frames >= 600, "{name}: {frames} frames");
+    }
+    let e = Scene::resolve("no-such-scene").unwrap_err().to_string();
+    assert!(e.contains("office") && e.contains("no-such-scene"), "{e}");
+}
+
+#[test]
+fn office_label_shares_match_the_3dref_hesai_statistics() {
+    // Every 20th frame of the sequence (the full table is in
+    // datasets/README.md).
+    let scene = Scene::resolve("office").unwrap();
+    let sim = Simulator::new(&scene);
+    let counts = (0..scene.frames)
+        .step_by(20)
+        .map(|k| specular::sim::LabelCounts::of(&sim.frame(k, scene.seed).frame))
+        .fold(specular::sim::LabelCounts::default(), |a, b| a.merge(b));
+    let s = counts.shares();
+    eprintln!("{}", counts.table_row("office (every 20th frame)"));
+    assert!((0.74..0.83).contains(&s.normal), "{s:?}");
+    assert!((0.03..0.08).contains(&s.glass_mirror), "{s:?}");
+    assert!((0.03..0.11).contains(&s.reflection), "{s:?}");
+    assert!((0.015..0.055).contains(&s.obstacle), "{s:?}");
+}
