@@ -29,7 +29,7 @@
 //! distortion within a sweep), beams have no divergence (no mixed pixels at
 //! edges), and the sensor is upright (yaw only).
 //!
-//! ```no_run
+//! ```
 //! use specular::sim::{simulate, Scene};
 //! let scene = Scene::resolve("demo")?;
 //! let run = simulate(&scene, Some(5), None)?;

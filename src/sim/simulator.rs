@@ -102,6 +102,11 @@ impl Simulator {
         &self.scene
     }
 
+    /// Beams cast per frame (the pattern without the blind sector).
+    pub fn beam_count(&self) -> usize {
+        self.beams.len()
+    }
+
     /// The beam tracer (for inspecting single beams).
     pub fn tracer(&self) -> &BeamTracer {
         &self.tracer
