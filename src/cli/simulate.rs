@@ -20,9 +20,9 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub scene: String,
     /// Output directory: OUT/frames/<timestamp>.ply, OUT/poses.txt,
-    /// OUT/planes.json.
-    #[arg(long)]
-    pub out: PathBuf,
+    /// OUT/planes.json. Optional with --stats (then nothing is written).
+    #[arg(long, required_unless_present = "stats")]
+    pub out: Option<PathBuf>,
     /// Number of frames (default: the scene's, i.e. its trajectory once).
     #[arg(long)]
     pub frames: Option<usize>,
@@ -32,7 +32,8 @@ pub struct SimulateArgs {
     /// Write ascii PLY (as the real 3DRef files) instead of binary.
     #[arg(long)]
     pub ascii: bool,
-    /// Print the label shares of the sequence as a Markdown table row.
+    /// Print the label shares of the sequence as a Markdown table (the
+    /// table of datasets/README.md).
     #[arg(long)]
     pub stats: bool,
 }
@@ -43,12 +44,13 @@ pub fn run(args: SimulateArgs) -> Result<()> {
     let n = args.frames.unwrap_or(scene.frames);
     sim::check_frames(n)?;
     let seed = args.seed.unwrap_or(scene.seed);
-    let frames_dir = args.out.join("frames");
     let sim = Simulator::new(&scene);
     let names: Vec<String> = (0..n).map(|k| sim.stamp(k).0).collect();
-    refuse_stale_frames(&frames_dir, &names)?;
-    std::fs::create_dir_all(&frames_dir)
-        .with_context(|| format!("creating {}", frames_dir.display()))?;
+    let frames_dir = args.out.as_ref().map(|o| o.join("frames"));
+    if let Some(dir) = &frames_dir {
+        refuse_stale_frames(dir, &names)?;
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let encoding = if args.ascii {
         PlyEncoding::Ascii
     } else {
@@ -63,11 +65,9 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         .into_par_iter()
         .map(|k| -> specular::Result<(LabelCounts, PlaneTally)> {
             let f = sim.frame(k, seed);
-            io::write_frame(
-                &frames_dir.join(format!("{}.ply", names[k])),
-                &f.frame,
-                encoding,
-            )?;
+            if let Some(dir) = &frames_dir {
+                io::write_frame(&dir.join(format!("{}.ply", names[k])), &f.frame, encoding)?;
+            }
             let mut tally = PlaneTally::default();
             tally.add(k, &planes.observed_in(&f));
             bar.inc(1);
@@ -79,19 +79,23 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         )?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
-
-    let poses: Vec<_> = (0..n).map(|k| sim.pose(k)).collect();
-    io::write_tum(&args.out.join("poses.txt"), &poses)?;
     let records = planes.records(&scene, &tally, |k| names[k].clone());
-    io::write_planes(&args.out.join("planes.json"), &records)?;
 
+    if let Some(out) = &args.out {
+        let poses: Vec<_> = (0..n).map(|k| sim.pose(k)).collect();
+        io::write_tum(&out.join("poses.txt"), &poses)?;
+        io::write_planes(&out.join("planes.json"), &records)?;
+    }
     println!(
-        "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes -> {}",
+        "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",
         scene.name,
         counts.points as f64 / n as f64,
         n as f64 / elapsed.max(1e-9),
         records.len(),
-        args.out.display()
+        match &args.out {
+            Some(out) => format!(" -> {}", out.display()),
+            None => String::new(),
+        }
     );
     if args.stats {
         println!("{}", LabelCounts::table_header());
