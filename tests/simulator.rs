@@ -577,3 +577,106 @@ fn office_label_shares_match_the_3dref_hesai_statistics() {
     assert!((0.03..0.11).contains(&s.reflection), "{s:?}");
     assert!((0.015..0.055).contains(&s.obstacle), "{s:?}");
 }
+
+/// A scene whose numbers are filled in by the property test below.
+const TEMPLATE: &str = r#"
+[sensor]
+model = "pandar_qt64"
+range_noise = {0}
+crop_range = {1}
+intensity_gain = {2}
+detection_threshold = {3}
+[trajectory]
+waypoints = [[{4}, 1.0, 1.0], [3.0, {5}, 1.0]]
+speed = {6}
+heading_smoothing = {7}
+[materials]
+wall = { type = "diffuse", reflectivity = {8} }
+win = { type = "glass", reflectance = {9}, transmittance = {10}, echo_peak = {11}, echo_width_deg = {12}, echo_lobe = {13} }
+[[rooms]]
+min = [0.0, 0.0, 0.0]
+max = [{14}, 3.0, {15}]
+yaw_deg = {16}
+material = "wall"
+sides = { "-x" = "win" }
+[[walls]]
+from = [{17}, 0.5]
+to = [2.0, 0.5]
+height = {18}
+material = "win"
+"#;
+
+fn toml_number(v: f64) -> String {
+    if v.is_nan() {
+        "nan".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{v:?}")
+    }
+}
+
+/// Values of the template's numbers that make a valid scene.
+const VALID: [f64; 19] = [
+    0.01, 25.0, 20000.0, 3.0, 1.0, 1.5, 1.0, 1.0, 0.6, 0.2, 0.6, 1.0, 3.0, 8.0, 4.0, 2.5, 10.0,
+    0.5, 2.0,
+];
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(96))]
+
+    /// Whatever the numbers, a scene is either rejected with an error
+    /// naming the file or simulated without panicking (valid numbers with
+    /// up to three replaced by odd ones).
+    #[test]
+    fn arbitrary_numbers_in_a_scene_never_panic(
+        changes in proptest::collection::vec(
+            (
+                0..19usize,
+                proptest::prop_oneof![
+                    proptest::prelude::Just(0.0),
+                    proptest::prelude::Just(-1.0),
+                    proptest::prelude::Just(1e300),
+                    proptest::prelude::Just(-1e-300),
+                    proptest::prelude::Just(f64::NAN),
+                    proptest::prelude::Just(f64::INFINITY),
+                    0.0..5.0f64,
+                    -10.0..100.0f64,
+                ],
+            ),
+            0..4,
+        )
+    ) {
+        let mut values = VALID;
+        for (i, v) in changes {
+            values[i] = v;
+        }
+        let mut text = TEMPLATE.to_string();
+        for (i, v) in values.iter().enumerate().rev() {
+            text = text.replace(&format!("{{{i}}}"), &toml_number(*v));
+        }
+        match Scene::from_toml(&text, Path::new("fuzz.toml")) {
+            Ok(scene) => {
+                let sim = Simulator::new(&scene);
+                let f = sim.frame(0, 1);
+                proptest::prop_assert!(f
+                    .frame
+                    .points
+                    .iter()
+                    .all(|p| p.xyz.iter().all(|c| c.is_finite())
+                        && (0.0..=255.0).contains(&p.intensity)));
+            }
+            Err(e) => proptest::prop_assert!(e.to_string().contains("fuzz.toml"), "{}", e),
+        }
+    }
+}
+
+#[test]
+fn the_fuzz_template_is_valid_with_its_default_numbers() {
+    let mut text = TEMPLATE.to_string();
+    for (i, v) in VALID.iter().enumerate().rev() {
+        text = text.replace(&format!("{{{i}}}"), &toml_number(*v));
+    }
+    let scene = Scene::from_toml(&text, Path::new("fuzz.toml")).unwrap();
+    assert!(Simulator::new(&scene).frame(0, 1).frame.points.len() > 30_000);
+}

@@ -53,7 +53,7 @@ impl SceneIndex {
         let mut triangles = Vec::new();
         for (i, s) in surfaces.iter().enumerate() {
             for tri in s.triangles().unwrap_or_default() {
-                split(tri, &mut |[a, b, c]| {
+                split(tri, MAX_SPLIT_DEPTH, &mut |[a, b, c]| {
                     triangles.push(Triangle {
                         a,
                         e1: b - a,
@@ -127,26 +127,29 @@ impl SceneIndex {
 /// makes the tree so large that every scene gets slower.)
 const MAX_EDGE: f64 = 10.0;
 
+/// At most `2^MAX_SPLIT_DEPTH` pieces per triangle, however large.
+const MAX_SPLIT_DEPTH: u32 = 10;
+
 /// Split a triangle at the midpoint of its longest edge until every edge
-/// is at most [`MAX_EDGE`] long.
-fn split(t: [DVec3; 3], out: &mut impl FnMut([DVec3; 3])) {
+/// is at most [`MAX_EDGE`] long (or `depth` splits are used up).
+fn split(t: [DVec3; 3], depth: u32, out: &mut impl FnMut([DVec3; 3])) {
     let [a, b, c] = t;
     let (ab, bc, ca) = (a.distance(b), b.distance(c), c.distance(a));
     let longest = ab.max(bc).max(ca);
-    if longest <= MAX_EDGE {
+    if longest <= MAX_EDGE || depth == 0 {
         out(t);
     } else if longest == ab {
         let m = (a + b) * 0.5;
-        split([a, m, c], out);
-        split([m, b, c], out);
+        split([a, m, c], depth - 1, out);
+        split([m, b, c], depth - 1, out);
     } else if longest == bc {
         let m = (b + c) * 0.5;
-        split([a, b, m], out);
-        split([a, m, c], out);
+        split([a, b, m], depth - 1, out);
+        split([a, m, c], depth - 1, out);
     } else {
         let m = (c + a) * 0.5;
-        split([a, b, m], out);
-        split([m, b, c], out);
+        split([a, b, m], depth - 1, out);
+        split([m, b, c], depth - 1, out);
     }
 }
 

@@ -10,6 +10,10 @@ use glam::DVec3;
 const PLANARITY_TOLERANCE: f64 = 1e-3;
 /// Smallest polygon area accepted, m².
 const MIN_AREA: f64 = 1e-6;
+/// Largest coordinate accepted, metres (keeps every product finite).
+pub const MAX_COORDINATE: f64 = 1e6;
+/// Most vertices of one polygon (ear clipping is quadratic or worse).
+pub const MAX_VERTICES: usize = 1000;
 
 /// A planar polygon with a material.
 ///
@@ -33,8 +37,9 @@ pub struct Surface {
 
 impl Surface {
     /// A surface from its boundary. Fails (with a message) when there are
-    /// fewer than three vertices, the polygon is degenerate (no area), a
-    /// coordinate is not finite, or a vertex is more than 1 mm off the plane.
+    /// fewer than three or more than [`MAX_VERTICES`] vertices, the polygon
+    /// is degenerate (no area), a coordinate is not finite, or a vertex is
+    /// more than 1 mm off the plane.
     pub fn new(vertices: Vec<DVec3>, material: usize, origin: String) -> Result<Self, String> {
         if vertices.len() < 3 {
             return Err(format!(
@@ -42,8 +47,19 @@ impl Surface {
                 vertices.len()
             ));
         }
-        if vertices.iter().any(|v| !v.is_finite()) {
-            return Err("vertex coordinates must be finite".into());
+        if vertices.len() > MAX_VERTICES {
+            return Err(format!(
+                "a polygon may have at most {MAX_VERTICES} vertices, got {}",
+                vertices.len()
+            ));
+        }
+        if vertices
+            .iter()
+            .any(|v| !v.is_finite() || v.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(format!(
+                "vertex coordinates must be finite and within ±{MAX_COORDINATE} m"
+            ));
         }
         // Newell's method: robust normal of a (possibly non-convex) polygon,
         // its length is twice the area.

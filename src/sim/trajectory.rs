@@ -39,13 +39,19 @@ impl Trajectory {
         if waypoints.len() < 2 {
             return Err("needs at least two waypoints".into());
         }
-        if waypoints.iter().any(|w| !w.is_finite()) {
-            return Err("waypoint coordinates must be finite".into());
+        let limit = super::surface::MAX_COORDINATE;
+        if waypoints
+            .iter()
+            .any(|w| !w.is_finite() || w.abs().max_element() > limit)
+        {
+            return Err(format!(
+                "waypoint coordinates must be finite and within ±{limit} m"
+            ));
         }
-        if !(speed > 0.0) || !speed.is_finite() {
-            return Err(format!("speed must be positive, got {speed}"));
+        if !(speed > 0.0) || !speed.is_finite() || speed > 1e4 {
+            return Err(format!("speed must be in (0, 1e4] m/s, got {speed}"));
         }
-        if !(smoothing >= 0.0) || !smoothing.is_finite() {
+        if !(smoothing >= 0.0) || !(smoothing <= limit) {
             return Err(format!(
                 "heading_smoothing must be non-negative, got {smoothing}"
             ));
