@@ -680,3 +680,28 @@ fn the_fuzz_template_is_valid_with_its_default_numbers() {
     let scene = Scene::from_toml(&text, Path::new("fuzz.toml")).unwrap();
     assert!(Simulator::new(&scene).frame(0, 1).frame.points.len() > 30_000);
 }
+
+#[test]
+fn every_reflective_plane_is_seen_from_the_side_its_normal_faces() {
+    let scene = Scene::resolve("lobby").unwrap();
+    let sim = Simulator::new(&scene);
+    let planes = specular::sim::TruePlanes::of(&scene);
+    assert_eq!(planes.groups.len(), 10);
+    let mut checked = 0;
+    for k in (0..scene.frames).step_by(25) {
+        let f = sim.frame(k, 1);
+        let o = f.pose.pose.translation.vector;
+        let o = DVec3::new(o.x, o.y, o.z);
+        for (p, t) in f.frame.points.iter().zip(&f.truth) {
+            if matches!(
+                p.label,
+                label::GLASS | label::MIRROR | label::OTHER_REFLECTIVE
+            ) {
+                let g = &planes.groups[planes.group_of[t.surface as usize].unwrap()];
+                assert!(g.normal.dot(o) + g.d > 0.0, "{:?} seen from behind", g.kind);
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 10_000, "{checked}");
+}

@@ -3,8 +3,8 @@
 //! Reflective surfaces (glass, mirror, other reflective) of the same class
 //! that lie on one plane (a window wall of several panes between mullions)
 //! form one landmark: its `hull` is the convex hull of all panes and `panes`
-//! lists each pane. The normal is oriented towards the trajectory (the side
-//! the sensor sees the plane from). `observations` counts the frames in
+//! lists each pane. The normal is oriented towards the trajectory: the side
+//! from which the sensor sees the plane. `observations` counts the frames in
 //! which at least one return is a surface echo of the plane.
 
 use glam::DVec3;
@@ -12,6 +12,7 @@ use nalgebra::Point2;
 
 use super::echo::label;
 use super::material::MaterialKind;
+use super::raycast::SceneIndex;
 use super::scene::Scene;
 use super::simulator::SimFrame;
 use crate::geometry::ConvexPolygon;
@@ -45,7 +46,13 @@ pub struct TruePlanes {
 }
 
 impl TruePlanes {
-    /// Group the reflective surfaces of `scene`.
+    /// Group the reflective surfaces of `scene` and orient each group
+    /// towards the trajectory.
+    ///
+    /// Orientation is decided by line of sight: trajectory points (every
+    /// ~0.25 m) that see a pane directly vote for the side they are on. A
+    /// group no trajectory point sees faces the nearest trajectory point
+    /// off its plane.
     pub fn of(scene: &Scene) -> Self {
         let samples = trajectory_samples(scene);
         let mut groups: Vec<PlaneGroup> = Vec::new();
@@ -61,35 +68,26 @@ impl TruePlanes {
                     && c.abs() >= COPLANAR_COS
                     && (g.d - c.signum() * s.d).abs() <= COPLANAR_D
             });
-            let gi = match found {
-                Some(gi) => gi,
-                None => {
-                    // Face the trajectory sample nearest to the surface.
-                    let centre = s.center();
-                    let nearest = samples
-                        .iter()
-                        .min_by(|a, b| {
-                            a.distance_squared(centre)
-                                .total_cmp(&b.distance_squared(centre))
-                        })
-                        .copied()
-                        .unwrap_or(centre + s.normal);
-                    let (normal, d) = if s.normal.dot(nearest) + s.d < 0.0 {
-                        (-s.normal, -s.d)
-                    } else {
-                        (s.normal, s.d)
-                    };
-                    groups.push(PlaneGroup {
-                        kind,
-                        surfaces: Vec::new(),
-                        normal,
-                        d,
-                    });
-                    groups.len() - 1
-                }
-            };
+            let gi = found.unwrap_or_else(|| {
+                groups.push(PlaneGroup {
+                    kind,
+                    surfaces: Vec::new(),
+                    normal: s.normal,
+                    d: s.d,
+                });
+                groups.len() - 1
+            });
             groups[gi].surfaces.push(i as u32);
             group_of[i] = Some(gi);
+        }
+        if !groups.is_empty() {
+            let index = SceneIndex::new(&scene.surfaces);
+            for g in &mut groups {
+                if orientation(scene, &index, g, &samples) < 0.0 {
+                    g.normal = -g.normal;
+                    g.d = -g.d;
+                }
+            }
         }
         Self { groups, group_of }
     }
@@ -160,6 +158,50 @@ impl TruePlanes {
             })
             .collect()
     }
+}
+
+/// +1 when the trajectory sees the group from the side its current normal
+/// points to, -1 when from the other side.
+fn orientation(scene: &Scene, index: &SceneIndex, g: &PlaneGroup, samples: &[DVec3]) -> f64 {
+    let side = |p: DVec3| g.normal.dot(p) + g.d;
+    let mut votes = 0i64;
+    for &i in &g.surfaces {
+        let s = &scene.surfaces[i as usize];
+        let centre = s.center();
+        // The centre and the vertices pulled a fifth of the way inwards.
+        let probes: Vec<DVec3> = std::iter::once(centre)
+            .chain(s.vertices.iter().take(8).map(|v| *v + (centre - *v) * 0.2))
+            .collect();
+        for &o in samples {
+            let sd = side(o);
+            if sd.abs() < 1e-6 {
+                continue;
+            }
+            for &p in &probes {
+                let dist = o.distance(p);
+                if dist < 1e-6 {
+                    continue;
+                }
+                let hit = index.cast(o, (p - o) / dist, dist + 1e-6, None);
+                if hit.is_some_and(|h| h.surface == i && (h.t - dist).abs() < 1e-6) {
+                    votes += if sd > 0.0 { 1 } else { -1 };
+                }
+            }
+        }
+    }
+    if votes != 0 {
+        return votes.signum() as f64;
+    }
+    // Nobody sees it: face the nearest trajectory point off the plane.
+    let centre = scene.surfaces[g.surfaces[0] as usize].center();
+    samples
+        .iter()
+        .filter(|o| side(**o).abs() >= 1e-6)
+        .min_by(|a, b| {
+            a.distance_squared(centre)
+                .total_cmp(&b.distance_squared(centre))
+        })
+        .map_or(1.0, |o| side(*o).signum())
 }
 
 /// Convex hull of points on a group's plane, counter-clockwise seen from its
