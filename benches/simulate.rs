@@ -54,9 +54,9 @@ fn main() {
         let ks = frames_of(&scene);
         let model = &scene.sensor.model;
         println!(
-            "\n{name}: {} surfaces, {} triangles, {} x {} beams ({} outside the blind sector), index built in {:.2} ms",
+            "\n{name}: {} surfaces, {} patches, {} x {} beams ({} outside the blind sector), index built in {:.2} ms",
             scene.surfaces.len(),
-            sim.tracer().index().triangle_count(),
+            sim.tracer().index().patch_count(),
             model.rings(),
             model.columns,
             sim.beam_count(),
