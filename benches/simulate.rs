@@ -3,9 +3,12 @@
 //! `cargo bench --bench simulate [-- SCENE ...]` (default: office, corridor,
 //! lobby). For each scene it times
 //!
-//! - one thread: `Simulator::frame` for 100 frames spread over the sequence;
+//! - one thread: `Simulator::frame` for 200 frames spread over the sequence;
 //! - rayon on 2 threads (and on all cores when there are more): the same
 //!   frames in parallel;
+//! - for both, frames per CPU-second of the process (Linux), which does not
+//!   depend on other load on the machine: frames are independent, so `n`
+//!   free cores give about `n` times that;
 //! - where the time goes, one thread: casting the primary rays only (the
 //!   BVH), tracing every beam with its secondary rays (beam physics), and the
 //!   rest of a frame (merging, return selection, noise, points).
@@ -16,11 +19,24 @@ use glam::DVec3;
 use rayon::prelude::*;
 use specular::sim::{Scene, Simulator};
 
-const FRAMES: usize = 100;
+const FRAMES: usize = 200;
 
 fn frames_of(scene: &Scene) -> Vec<usize> {
     let step = (scene.frames / FRAMES).max(1);
     (0..FRAMES).map(|i| (i * step) % scene.frames).collect()
+}
+
+/// CPU time used by this process so far (user + system), seconds, from
+/// `/proc/self/stat` (Linux; `None` elsewhere). Clock ticks are taken as
+/// 1/100 s (USER_HZ on Linux).
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command name (which is in parentheses).
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = fields.get(11)?.parse().ok()?;
+    let stime: f64 = fields.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
 }
 
 /// Seconds per frame of `f` run over `ks` on the current thread pool.
@@ -72,10 +88,19 @@ fn main() {
                 .num_threads(threads)
                 .build()
                 .expect("thread pool");
+            let cpu0 = cpu_seconds();
             let (spf, points) =
                 pool.install(|| time_parallel(&ks, |k| sim.frame(k, 1).frame.points.len()));
+            // Frames per CPU-second: what one core delivers, whatever else
+            // runs on the machine.
+            let per_cpu = match (cpu0, cpu_seconds()) {
+                (Some(a), Some(b)) if b > a => {
+                    format!(", {:.0} frames per CPU-second", ks.len() as f64 / (b - a))
+                }
+                _ => String::new(),
+            };
             println!(
-                "  {threads} thread(s): {:7.1} frames/s ({:.2} ms/frame, {:.0} points/frame)",
+                "  {threads} thread(s): {:7.1} frames/s ({:.2} ms/frame, {:.0} points/frame{per_cpu})",
                 1.0 / spf,
                 spf * 1e3,
                 points as f64 / ks.len() as f64
