@@ -969,20 +969,20 @@ fn leading_digits(x: u64, n: usize) -> u64 {
     eight_digits(x << (64 - 8 * n))
 }
 
-/// A float written `[-]digits.digits` at `q` (at most [`TOKEN_LIMIT`]): the
-/// correctly rounded `f32` and the index of the byte after the number, which
-/// is not a digit (the caller checks that it ends the token, so `1.5e3` is
-/// rejected there). `None` for any other form (no dot, no digit before or
-/// after it), more than 7 integer digits or 15 digits in all, or a value
-/// whose `f64` lies halfway between two `f32`s (where casting could round
-/// twice).
+/// A float written `[-]digits.digits` (or `[-]digits` when `PLAIN`) at `q`
+/// (at most [`TOKEN_LIMIT`]): the correctly rounded `f32` and the index of
+/// the byte after the number, which is not a digit (the caller checks that it ends the
+/// token, so `1.5e3` is rejected there). `None` for any other form (no digit
+/// before the dot or none after it), more than 7 integer digits or 15 digits
+/// in all, or a value whose `f64` lies halfway between two `f32`s (where
+/// casting could round twice).
 ///
 /// The value is `m / 10^k` for the digits `m` and the fraction length `k`,
 /// both exact in an `f64`, divided with one rounding and cast to `f32`. The
 /// general path ([`parse_fast`], or the standard parser) also gives the
 /// correctly rounded value of the same decimal, so both paths agree.
 #[inline(always)]
-fn fast_float(w: &[u8; WIN], q: usize) -> Option<(f32, usize)> {
+fn fast_float<const PLAIN: bool>(w: &[u8; WIN], q: usize) -> Option<(f32, usize)> {
     debug_assert!(q <= TOKEN_LIMIT);
     let neg = (w[q] == b'-') as usize;
     let q = q + neg;
@@ -990,8 +990,16 @@ fn fast_float(w: &[u8; WIN], q: usize) -> Option<(f32, usize)> {
     // Integer digits: `d` of them, then the dot.
     let a = word(w, q) ^ ZEROS;
     let d = digit_run(a);
-    if d == 0 || d == 8 || (a >> (8 * d)) as u8 != b'.' ^ b'0' {
+    if d == 0 || d == 8 {
         return None;
+    }
+    if (a >> (8 * d)) as u8 != b'.' ^ b'0' {
+        if !PLAIN {
+            return None;
+        }
+        // An integer: below 10^7, exact in an `f32`.
+        let v = leading_digits(a, d) as f32;
+        return Some((f32::from_bits(v.to_bits() | (neg as u32) << 31), q + d));
     }
     // The integer digits followed by the digits after the dot, dot removed:
     // bytes 0..d from `a`, bytes d..8 from the word one byte further on.
@@ -1034,19 +1042,29 @@ fn fast_float(w: &[u8; WIN], q: usize) -> Option<(f32, usize)> {
 /// Powers of ten as integers, for joining digit groups.
 const POW10_U64: [u64; 8] = [1, 10, 100, 1_000, 10_000, 100_000, 1_000_000, 10_000_000];
 
-/// An unsigned integer written `digits.0` (1 to 4 digits) at `q` (at most
-/// [`TOKEN_LIMIT`]): its value and the index of the byte after the token.
+/// An unsigned integer written `digits.0` (or `digits` when `PLAIN`), 1 to 4
+/// digits, at `q` (at most [`TOKEN_LIMIT`]): its value and the index of the
+/// byte after the number, which is not a digit (the caller checks that it
+/// ends the token, so `1.5` is rejected there).
 #[inline(always)]
-fn fast_uint(w: &[u8; WIN], q: usize) -> Option<(u32, usize)> {
+fn fast_uint<const PLAIN: bool>(w: &[u8; WIN], q: usize) -> Option<(u32, usize)> {
     debug_assert!(q <= TOKEN_LIMIT);
     let a = word(w, q) ^ (0x30 * ONES);
     let d = digit_run(a);
-    // Byte d must be the dot and byte d + 1 a zero: `.0` xor `00` is
-    // 0x1e, 0x00 (as the low half of a little-endian u16).
-    if d == 0 || d > 4 || (a >> (8 * d)) as u16 != (b'.' ^ b'0') as u16 {
+    if d == 0 || d > 4 {
         return None;
     }
-    Some((four_digits((a as u32) << (32 - 8 * d)), q + d + 2))
+    let value = four_digits((a as u32) << (32 - 8 * d));
+    // After the digits: `.0` (xor `00`: 0x1e then 0x00, the low half of a
+    // little-endian u16), or when `PLAIN` whatever ends the token.
+    let after = (a >> (8 * d)) as u16;
+    if after == (b'.' ^ b'0') as u16 {
+        Some((value, q + d + 2))
+    } else if PLAIN {
+        Some((value, q + d))
+    } else {
+        None
+    }
 }
 
 /// Value of four decimal digits, one per byte (0..=9, most significant in
@@ -1206,17 +1224,17 @@ fn fast_lines(
 /// [`fast_line`] for [`PLAN_3DREF`], written out.
 #[inline(always)]
 fn fast_line_3dref(w: &[u8; WIN]) -> Option<(Point, usize)> {
-    let (x, end) = fast_float(w, 0)?;
-    let (y, end) = fast_float(w, after_space(w, end)?)?;
-    let (z, end) = fast_float(w, after_space(w, end)?)?;
+    let (x, end) = fast_float::<false>(w, 0)?;
+    let (y, end) = fast_float::<false>(w, after_space(w, end)?)?;
+    let (z, end) = fast_float::<false>(w, after_space(w, end)?)?;
     let end = skip_tokens::<Blanks>(w, after_space(w, end)?, 3)?;
     // The intensity is nearly always a small integer (`14.0`).
     let q = after_space(w, end)?;
-    let (intensity, end) = match fast_uint(w, q) {
+    let (intensity, end) = match fast_uint::<false>(w, q) {
         Some((v, end)) => (v as f32, end),
-        None => fast_float(w, q)?,
+        None => fast_float::<false>(w, q)?,
     };
-    let (ring, end) = fast_uint(w, after_space(w, end)?)?;
+    let (ring, end) = fast_uint::<false>(w, after_space(w, end)?)?;
     // Return and label are nearly always `R.0 L.0\n`: check all eight bytes
     // at once.
     let q = after_space(w, end)?;
@@ -1228,8 +1246,8 @@ fn fast_line_3dref(w: &[u8; WIN]) -> Option<(Point, usize)> {
         let label = ((t >> 32) as u8).wrapping_sub(b'0') as u32;
         (ret, label, q + 8)
     } else {
-        let (ret, end) = fast_uint(w, q)?;
-        let (label, end) = fast_uint(w, after_space(w, end)?)?;
+        let (ret, end) = fast_uint::<false>(w, q)?;
+        let (label, end) = fast_uint::<false>(w, after_space(w, end)?)?;
         (ret, label, line_end(w, end)?)
     };
     let ring = u16::try_from(ring).ok()?;
@@ -1258,7 +1276,7 @@ fn fast_line(w: &[u8; WIN], plan: &[Op]) -> Option<(Point, usize)> {
     for (i, &op) in plan.iter().enumerate() {
         let end = match op {
             Op::Float(k) => {
-                let (v, end) = fast_float(w, q)?;
+                let (v, end) = fast_float::<true>(w, q)?;
                 match k {
                     0 => p.xyz[0] = v,
                     1 => p.xyz[1] = v,
@@ -1268,7 +1286,7 @@ fn fast_line(w: &[u8; WIN], plan: &[Op]) -> Option<(Point, usize)> {
                 end
             }
             Op::Int(slot) => {
-                let (v, end) = fast_uint(w, q)?;
+                let (v, end) = fast_uint::<true>(w, q)?;
                 match slot {
                     Slot::Ring => p.ring = u16::try_from(v).ok()?,
                     Slot::Return if v == 1 || v == 2 => p.ret = v as u8,
@@ -1705,31 +1723,56 @@ mod tests {
             .collect();
         let plan = fast_plan(&slots);
         assert_eq!(plan.len(), 9);
-        let line = b"6.0 255.0 x -1.5 \xc3\xa9 yy 0.001 -0.0 2.0 63.0\n";
-        let (p, used) = fast_line(&window(line, 0), &plan).unwrap();
-        assert_eq!(used, line.len());
+        let want = bits(&[Point {
+            xyz: [-1.5, 0.001, -0.0],
+            intensity: 255.0,
+            ring: 63,
+            ret: 2,
+            label: 6,
+        }]);
+        // Integral values may also come without `.0` (as `write_frame`
+        // writes them) in other layouts.
+        for line in [
+            &b"6.0 255.0 x -1.5 \xc3\xa9 yy 0.001 -0.0 2.0 63.0\n"[..],
+            b"6 255 x -1.5 \xc3\xa9 yy 0.001 -0 2 63\r\n",
+        ] {
+            let (p, used) = fast_line(&window(line, 0), &plan).unwrap();
+            assert_eq!(used, line.len());
+            assert_eq!(bits(&[p]), want);
+        }
+        let written = b"2.6758089 -11.371753 1.3117709 14 36 1 4\n";
+        let slots = [
+            Slot::X,
+            Slot::Y,
+            Slot::Z,
+            Slot::Intensity,
+            Slot::Ring,
+            Slot::Return,
+            Slot::Label,
+        ];
+        let (p, used) = fast_line(&window(written, 0), &fast_plan(&slots)).unwrap();
+        assert_eq!(used, written.len());
         assert_eq!(
-            bits(&[p]),
-            bits(&[Point {
-                xyz: [-1.5, 0.001, -0.0],
-                intensity: 255.0,
-                ring: 63,
-                ret: 2,
-                label: 6,
-            }])
+            (p.xyz[1], p.intensity, p.ring, p.ret, p.label),
+            (-11.371753, 14.0, 36, 1, 4)
         );
     }
 
     #[test]
     fn fast_tokens() {
-        let f = |s: &str| {
-            let mut b = s.as_bytes().to_vec();
-            b.push(b' ');
-            // Accepted when the number is the whole token (the caller checks
-            // the byte after it, which is not a digit).
-            fast_float(&window(&b, 0), 0)
+        // Accepted when the number is the whole token (the caller checks
+        // the byte after it, which is not a digit).
+        fn f<const PLAIN: bool>(s: &str) -> Option<u32> {
+            let b = format!("{s} ");
+            fast_float::<PLAIN>(&window(b.as_bytes(), 0), 0)
                 .and_then(|(v, end)| (end == s.len()).then_some(v.to_bits()))
-        };
+        }
+        fn u<const PLAIN: bool>(s: &str) -> Option<u32> {
+            let b = format!("{s}\n");
+            fast_uint::<PLAIN>(&window(b.as_bytes(), 0), 0)
+                .and_then(|(v, end)| (end == s.len()).then_some(v))
+        }
+        let std = |s: &str| Some(s.parse::<f32>().unwrap().to_bits());
         for s in [
             "0.0",
             "-0.0",
@@ -1744,17 +1787,21 @@ mod tests {
             "0.1000000000000",
             "3.4028235",
         ] {
-            assert_eq!(f(s), Some(s.parse::<f32>().unwrap().to_bits()), "{s}");
+            assert_eq!(f::<false>(s), std(s), "{s}");
+            assert_eq!(f::<true>(s), std(s), "{s}");
+        }
+        for s in ["1", "-1", "-0", "0014", "9999999"] {
+            assert_eq!(f::<false>(s), None, "{s}");
+            assert_eq!(f::<true>(s), std(s), "{s}");
         }
         for s in [
-            "1",
-            "-1",
             ".5",
             "5.",
             "-.5",
             "+1.5",
             "1e5",
             "1.5e3",
+            "12345678",
             "12345678.5",
             "1.234567890123456",
             "123456789012345.0",
@@ -1765,17 +1812,13 @@ mod tests {
             "nan",
             "",
         ] {
-            assert_eq!(f(s), None, "{s}");
+            assert_eq!(f::<false>(s), None, "{s}");
+            assert_eq!(f::<true>(s), None, "{s}");
         }
         // Exactly halfway between two f32s: left to the standard parser.
-        assert_eq!(f("1048576.0625"), None);
+        assert_eq!(f::<true>("1048576.0625"), None);
         assert_eq!("1048576.0625".parse::<f32>(), Ok(1048576.0));
 
-        let u = |s: &str| {
-            let mut b = s.as_bytes().to_vec();
-            b.push(b'\n');
-            fast_uint(&window(&b, 0), 0).and_then(|(v, end)| (end == s.len()).then_some(v))
-        };
         for (s, v) in [
             ("0.0", 0),
             ("1.0", 1),
@@ -1784,10 +1827,18 @@ mod tests {
             ("9999.0", 9999),
             ("007.0", 7),
         ] {
-            assert_eq!(u(s), Some(v), "{s}");
+            assert_eq!(u::<false>(s), Some(v), "{s}");
+            assert_eq!(u::<true>(s), Some(v), "{s}");
         }
-        for s in ["1", "1.00", "1.5", "10000.0", "-1.0", ".0", "1.", "x.0"] {
-            assert_eq!(u(s), None, "{s}");
+        for (s, v) in [("0", 0), ("1", 1), ("36", 36), ("9999", 9999)] {
+            assert_eq!(u::<false>(s), None, "{s}");
+            assert_eq!(u::<true>(s), Some(v), "{s}");
+        }
+        for s in [
+            "1.00", "1.5", "10000.0", "10000", "-1.0", ".0", "1.", "x.0", "1e0",
+        ] {
+            assert_eq!(u::<false>(s), None, "{s}");
+            assert_eq!(u::<true>(s), None, "{s}");
         }
     }
 
@@ -1894,17 +1945,25 @@ mod tests {
             digits in "-?[0-9]{1,8}\\.[0-9]{1,9}",
         ) {
             for s in [format!("{x}"), format!("{x:.prec$}"), digits] {
-                let mut b = s.clone().into_bytes();
-                b.push(b' ');
-                if let Some((v, end)) = fast_float(&window(&b, 0), 0) {
-                    proptest::prop_assert_eq!(end, s.len());
-                    proptest::prop_assert_eq!(v.to_bits(), s.parse::<f32>().unwrap().to_bits(), "{}", s);
-                } else if x.is_finite() && s == format!("{x}") && s.contains('.') && s.len() <= 16 {
-                    // Only values halfway between two f32s in f64 (none are
-                    // shortest forms) or above 2^53 miss the fast path.
-                    let (_, end) = parse_fast(&b, 0).unwrap();
-                    proptest::prop_assert_eq!(end, s.len());
+                let b = format!("{s} ");
+                let w = window(b.as_bytes(), 0);
+                for got in [fast_float::<false>(&w, 0), fast_float::<true>(&w, 0)] {
+                    if let Some((v, end)) = got.filter(|&(_, end)| end == s.len()) {
+                        let want = s.parse::<f32>().unwrap();
+                        proptest::prop_assert_eq!(v.to_bits(), want.to_bits(), "{} {}", s, end);
+                    }
                 }
+            }
+            // The shortest forms of moderate magnitudes all take the fast
+            // path, but for values whose f64 is halfway between two f32s.
+            let s = format!("{x}");
+            if (1e-4..1e6).contains(&x.abs())
+                && s.contains('.')
+                && !f32_halfway(s.parse::<f64>().unwrap())
+            {
+                let b = format!("{s} ");
+                let got = fast_float::<false>(&window(b.as_bytes(), 0), 0);
+                proptest::prop_assert!(got.is_some_and(|(_, end)| end == s.len()), "{}", s);
             }
         }
     }
