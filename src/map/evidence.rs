@@ -49,6 +49,10 @@ pub struct EvidenceParams {
     /// Single echoes within this angle of normal incidence cast no vote
     /// (glass echoes peak there), degrees.
     pub peak_angle_deg: f64,
+    /// Whether a weak single echo on the plane votes "glass". Off by default:
+    /// where the infinite plane cuts the floor, ceiling or a wall at a
+    /// grazing angle, those surfaces return weak echoes "on the plane" too.
+    pub weak_single_echo_votes: bool,
     /// A transparent region with fewer surface echoes than this share of its
     /// transparent votes is an opening, not glass.
     pub min_echo_fraction: f64,
@@ -64,9 +68,10 @@ impl Default for EvidenceParams {
             min_votes: 3,
             surface_band: 0.1,
             behind: 0.1,
-            pass_margin: 0.5,
+            pass_margin: 0.15,
             opaque_intensity_ratio: 3.0,
             peak_angle_deg: 5.0,
+            weak_single_echo_votes: false,
             min_echo_fraction: 0.0,
             max_cells: 4_000_000,
         }
@@ -137,7 +142,11 @@ pub fn gather_evidence(
     for (_, v) in &partial {
         for &(uv, intensity) in &v.single_echoes {
             match threshold {
-                Some(th) if (intensity as f64) <= th => total.vote_echo(&uv),
+                Some(th) if (intensity as f64) <= th => {
+                    if params.weak_single_echo_votes {
+                        total.vote_echo(&uv)
+                    }
+                }
                 _ => total.vote(&uv, 0, 1),
             }
         }
@@ -197,6 +206,8 @@ fn vote_frame(
             // (where dual returns found the surface) does it count.
             if plane.boundary.signed_distance(&uv) <= p.pass_margin {
                 grid.vote(&uv, 1, 0);
+            } else {
+                grid.vote_open(&uv);
             }
         } else if s.abs() <= p.surface_band {
             match f.scan.partner(i) {
