@@ -22,6 +22,7 @@
 //! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
 //! | [`eval`] | the paper's metrics: precision, recall, IoU, removal rate |
 //! | [`pipeline`] | wiring: runs a method over a sequence of frames |
+//! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
 //!
 //! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
@@ -45,6 +46,7 @@ pub mod reflect;
 pub mod registration;
 pub mod rng;
 pub mod sensor;
+pub mod sim;
 pub mod slam;
 
 pub use error::{Error, Result};

@@ -85,18 +85,26 @@ pub(crate) fn detect(
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
     let sequence = Sequence::load(frames, poses, config.input.pose_tolerance, &mut timings)?;
-    let (mut output, map) = match config.method {
-        Method::SingleScan => (run_single_scan(&sequence, config)?, None),
-        Method::PlaneOptimized => {
-            let out = run_plane_optimized(&sequence, config)?;
-            (out.run.clone(), Some(out))
-        }
-    };
+    let (mut output, map) = run_method(&sequence, config)?;
     timings.merge(&output.timings);
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     output.timings = timings;
     Ok((sequence, output, map))
+}
+
+/// Run the configured method on a loaded sequence.
+pub(crate) fn run_method(
+    sequence: &Sequence,
+    config: &Config,
+) -> Result<(RunOutput, Option<PlaneOptimizedOutput>)> {
+    Ok(match config.method {
+        Method::SingleScan => (run_single_scan(sequence, config)?, None),
+        Method::PlaneOptimized => {
+            let out = run_plane_optimized(sequence, config)?;
+            (out.run.clone(), Some(out))
+        }
+    })
 }
 
 /// Write predictions, metrics (when labelled), the configuration used and,

@@ -5,6 +5,7 @@ mod convert;
 mod demo;
 mod detect;
 mod eval;
+mod simulate;
 mod slam;
 
 use std::path::PathBuf;
@@ -34,6 +35,8 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Run the showcase on the built-in sample and print the metrics.
     Demo(demo::DemoArgs),
+    /// Simulate a dual-return LiDAR sequence with glass and mirrors.
+    Simulate(simulate::SimulateArgs),
     /// Print the effective configuration as TOML (every key with its value).
     Config {
         /// Built-in name (default, paper) or path to a TOML file.
@@ -74,6 +77,7 @@ pub fn run() -> Result<()> {
         Command::Eval(args) => eval::run(args),
         Command::Demo(args) => demo::run(args),
         Command::Convert(args) => convert::run(args),
+        Command::Simulate(args) => simulate::run(args),
         Command::Config { config } => {
             print!("{}", load_config(&config)?.to_toml());
             Ok(())

@@ -32,6 +32,9 @@ pub struct EvidenceGrid {
     pub transparent: Vec<u32>,
     /// Opaque votes per cell (row-major).
     pub opaque: Vec<u32>,
+    /// Votes of beams that passed the plane where it has no known surface:
+    /// open space (row-major).
+    pub open: Vec<u32>,
     /// The transparent votes that were echoes from the surface itself
     /// (row-major); glass and mirrors return them, openings do not.
     pub echo: Vec<u32>,
@@ -76,6 +79,7 @@ impl EvidenceGrid {
             transparent: vec![0; cols * rows],
             opaque: vec![0; cols * rows],
             echo: vec![0; cols * rows],
+            open: vec![0; cols * rows],
             min_echo_fraction: 0.0,
             min_votes,
             opaque_intensity: None,
@@ -111,6 +115,7 @@ impl EvidenceGrid {
             transparent: vec![0; self.transparent.len()],
             opaque: vec![0; self.opaque.len()],
             echo: vec![0; self.echo.len()],
+            open: vec![0; self.open.len()],
             states: Vec::new(),
             ..self.clone()
         }
@@ -170,6 +175,14 @@ impl EvidenceGrid {
         out
     }
 
+    /// Add an open-space vote (a beam passed the plane where it has no
+    /// known surface) to the cell holding `uv`.
+    pub fn vote_open(&mut self, uv: &Point2<f64>) {
+        if let Some(k) = self.index(uv) {
+            self.open[k] += 1;
+        }
+    }
+
     /// Add a surface-echo vote (a transparent vote that is also an echo from
     /// the surface itself) to the cell holding `uv`.
     pub fn vote_echo(&mut self, uv: &Point2<f64>) {
@@ -210,6 +223,9 @@ impl EvidenceGrid {
         for (a, b) in self.echo.iter_mut().zip(&other.echo) {
             *a += b;
         }
+        for (a, b) in self.open.iter_mut().zip(&other.open) {
+            *a += b;
+        }
     }
 
     /// The state of cell `index`: the majority of the votes over the cell
@@ -223,7 +239,7 @@ impl EvidenceGrid {
 
     fn vote_state(&self, index: usize) -> Surface {
         let (i, j) = ((index % self.cols) as isize, (index / self.cols) as isize);
-        let (mut t, mut o) = (0u32, 0u32);
+        let (mut t, mut o, mut e) = (0u32, 0u32, 0u32);
         for dj in -1..=1 {
             for di in -1..=1 {
                 let (x, y) = (i + di, j + dj);
@@ -231,15 +247,18 @@ impl EvidenceGrid {
                     let k = y as usize * self.cols + x as usize;
                     t += self.transparent[k];
                     o += self.opaque[k];
+                    e += self.open[k];
                 }
             }
         }
-        if t + o < self.min_votes {
+        if t + o + e < self.min_votes {
             Surface::Unknown
-        } else if t >= o {
+        } else if t >= o && t >= e {
             Surface::Transparent
-        } else {
+        } else if o >= e {
             Surface::Opaque
+        } else {
+            Surface::Open
         }
     }
 

@@ -96,6 +96,9 @@ impl Hasher for FxHasher {
     }
 }
 
+/// A hash set with the Fx hash.
+pub type FxHashSet<T> = HashSet<T, BuildHasherDefault<FxHasher>>;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -110,6 +113,3 @@ mod tests {
         }
     }
 }
-
-/// A hash set with the Fx hash.
-pub type FxHashSet<T> = HashSet<T, BuildHasherDefault<FxHasher>>;

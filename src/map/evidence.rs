@@ -5,7 +5,9 @@
 //! and glass beyond the candidates is missed. The scans say more: where a
 //! beam crosses the plane and returns from *behind* it, or where a surface
 //! echo on the plane has a second return behind it, the plane is transparent
-//! or reflective there; where a beam ends *on* the plane with a single
+//! or reflective there (a beam through the plane counts only near the
+//! landmark's hull, since beyond it the "plane" may be open space); where a
+//! beam ends *on* the plane with a single
 //! return as bright as an ordinary surface, it is opaque, and a single weak
 //! echo like the plane's glass echoes is glass with nothing behind it in
 //! range. "Bright" is relative to the landmark's own glass echoes (the
@@ -37,12 +39,20 @@ pub struct EvidenceParams {
     pub surface_band: f64,
     /// A return this far beyond the crossing is behind the plane, m.
     pub behind: f64,
+    /// Beams passing the plane vote "transparent" only within this distance
+    /// of the landmark's hull (beyond it they may cross open space); surface
+    /// echoes vote anywhere on the grid, m.
+    pub pass_margin: f64,
     /// A single echo on the plane brighter than this many times the median
     /// glass echo is opaque (wall-like); a dimmer one is glass.
     pub opaque_intensity_ratio: f64,
     /// Single echoes within this angle of normal incidence cast no vote
     /// (glass echoes peak there), degrees.
     pub peak_angle_deg: f64,
+    /// Whether a weak single echo on the plane votes "glass". Off by default:
+    /// where the infinite plane cuts the floor, ceiling or a wall at a
+    /// grazing angle, those surfaces return weak echoes "on the plane" too.
+    pub weak_single_echo_votes: bool,
     /// A transparent region with fewer surface echoes than this share of its
     /// transparent votes is an opening, not glass.
     pub min_echo_fraction: f64,
@@ -58,8 +68,10 @@ impl Default for EvidenceParams {
             min_votes: 3,
             surface_band: 0.1,
             behind: 0.1,
+            pass_margin: 0.15,
             opaque_intensity_ratio: 3.0,
             peak_angle_deg: 5.0,
+            weak_single_echo_votes: false,
             min_echo_fraction: 0.0,
             max_cells: 4_000_000,
         }
@@ -130,7 +142,11 @@ pub fn gather_evidence(
     for (_, v) in &partial {
         for &(uv, intensity) in &v.single_echoes {
             match threshold {
-                Some(th) if (intensity as f64) <= th => total.vote_echo(&uv),
+                Some(th) if (intensity as f64) <= th => {
+                    if params.weak_single_echo_votes {
+                        total.vote_echo(&uv)
+                    }
+                }
                 _ => total.vote(&uv, 0, 1),
             }
         }
@@ -185,7 +201,14 @@ fn vote_frame(
         }
         let s = r - t;
         if s > p.behind {
-            grid.vote(&uv, 1, 0);
+            // A beam through the plane: glass, or open space where the plane
+            // has no surface at all. Only near the landmark's own boundary
+            // (where dual returns found the surface) does it count.
+            if plane.boundary.signed_distance(&uv) <= p.pass_margin {
+                grid.vote(&uv, 1, 0);
+            } else {
+                grid.vote_open(&uv);
+            }
         } else if s.abs() <= p.surface_band {
             match f.scan.partner(i) {
                 // A surface echo with a return behind the plane: glass.

@@ -55,8 +55,21 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
     let n = grid.cols * grid.rows;
     let regions = grid.regions(Surface::Transparent);
     let cell_area = grid.cell * grid.cell;
+    // Opaque cells bordering non-opaque ones: interior opaque cells are
+    // excluded by convexity once the border is (and the LP stays small).
+    let is_opaque = |x: isize, y: isize| {
+        x < 0
+            || y < 0
+            || x as usize >= grid.cols
+            || y as usize >= grid.rows
+            || grid.cell_state(y as usize * grid.cols + x as usize) == Surface::Opaque
+    };
     let opaque: Vec<Point2<f64>> = (0..n)
         .filter(|&k| grid.cell_state(k) == Surface::Opaque)
+        .filter(|&k| {
+            let (i, j) = ((k % grid.cols) as isize, (k / grid.cols) as isize);
+            !(is_opaque(i - 1, j) && is_opaque(i + 1, j) && is_opaque(i, j - 1) && is_opaque(i, j + 1))
+        })
         .map(|k| grid.centre(k))
         .collect();
     regions

@@ -60,6 +60,37 @@ impl Sequence {
         })
     }
 
+    /// A sequence of frames already in memory (e.g. from the simulator),
+    /// with their poses when known. `origin` names the source in messages.
+    pub fn from_frames(
+        frames: Vec<Frame>,
+        poses: Option<Vec<Isometry3<f64>>>,
+        origin: &str,
+    ) -> Result<Self> {
+        if let Some(p) = &poses {
+            if p.len() != frames.len() {
+                return Err(crate::Error::Input(format!(
+                    "{origin}: {} poses for {} frames",
+                    p.len(),
+                    frames.len()
+                )));
+            }
+        }
+        let entries = frames
+            .iter()
+            .map(|f| FrameEntry {
+                path: Path::new(origin).join(format!("{}.ply", f.name)),
+                name: f.name.clone(),
+                stamp: f.stamp,
+            })
+            .collect();
+        Ok(Self {
+            entries,
+            frames,
+            poses,
+        })
+    }
+
     /// Number of frames.
     pub fn len(&self) -> usize {
         self.frames.len()

@@ -1,0 +1,144 @@
+//! `specular simulate`: write a simulated 3DRef-style sequence (frames,
+//! true poses, true reflective planes) from a scene.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use specular::io::{self, PlyEncoding};
+use specular::sim::{self, LabelCounts, PlaneTally, Scene, Simulator, TruePlanes};
+
+/// Arguments of `simulate`.
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Scene: a TOML file or a built-in name (demo, office, corridor,
+    /// mirror-room, lobby, two-panes).
+    #[arg(long)]
+    pub scene: String,
+    /// Output directory: OUT/frames/<timestamp>.ply, OUT/poses.txt,
+    /// OUT/planes.json. Optional with --stats (then nothing is written).
+    #[arg(long, required_unless_present = "stats")]
+    pub out: Option<PathBuf>,
+    /// Number of frames (default: the scene's, i.e. its trajectory once).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Seed of the range noise (default: the scene's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Write ascii PLY (as the real 3DRef files) instead of binary.
+    #[arg(long)]
+    pub ascii: bool,
+    /// Print the label shares of the sequence as a Markdown table (the
+    /// table of datasets/README.md).
+    #[arg(long)]
+    pub stats: bool,
+}
+
+/// Run `simulate`.
+pub fn run(args: SimulateArgs) -> Result<()> {
+    let scene = Scene::resolve(&args.scene)?;
+    let n = args.frames.unwrap_or(scene.frames);
+    sim::check_frames(n)?;
+    let seed = args.seed.unwrap_or(scene.seed);
+    let sim = Simulator::new(&scene);
+    let names: Vec<String> = (0..n).map(|k| sim.stamp(k).0).collect();
+    let frames_dir = args.out.as_ref().map(|o| o.join("frames"));
+    if let Some(dir) = &frames_dir {
+        refuse_stale_frames(dir, &names)?;
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let encoding = if args.ascii {
+        PlyEncoding::Ascii
+    } else {
+        PlyEncoding::BinaryLittleEndian
+    };
+
+    let planes = TruePlanes::of(&scene);
+    let bar = progress_bar(n as u64);
+    let started = Instant::now();
+    // Each frame depends only on (scene, k, seed): any order, same bytes.
+    let (counts, tally) = (0..n)
+        .into_par_iter()
+        .map(|k| -> specular::Result<(LabelCounts, PlaneTally)> {
+            let f = sim.frame(k, seed);
+            if let Some(dir) = &frames_dir {
+                io::write_frame(&dir.join(format!("{}.ply", names[k])), &f.frame, encoding)?;
+            }
+            let mut tally = PlaneTally::default();
+            tally.add(k, &planes.observed_in(&f));
+            bar.inc(1);
+            Ok((LabelCounts::of(&f.frame), tally))
+        })
+        .try_reduce(
+            || (LabelCounts::default(), PlaneTally::default()),
+            |a, b| Ok((a.0.merge(b.0), a.1.merge(b.1))),
+        )?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    let records = planes.records(&scene, &tally, |k| names[k].clone());
+
+    if let Some(out) = &args.out {
+        let poses: Vec<_> = (0..n).map(|k| sim.pose(k)).collect();
+        io::write_tum(&out.join("poses.txt"), &poses)?;
+        io::write_planes(&out.join("planes.json"), &records)?;
+    }
+    println!(
+        "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",
+        scene.name,
+        counts.points as f64 / n as f64,
+        n as f64 / elapsed.max(1e-9),
+        records.len(),
+        match &args.out {
+            Some(out) => format!(" -> {}", out.display()),
+            None => String::new(),
+        }
+    );
+    if args.stats {
+        println!("{}", LabelCounts::table_header());
+        println!("{}", counts.table_row(&scene.name));
+    }
+    Ok(())
+}
+
+/// Refuse to mix runs: `.ply` files in the frames directory that this run
+/// would not overwrite would be read as part of the sequence later.
+fn refuse_stale_frames(dir: &Path, names: &[String]) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(()); // no directory yet
+    };
+    let wanted: std::collections::HashSet<&str> = names.iter().map(String::as_str).collect();
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let is_ply = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+        if is_ply && !wanted.contains(stem) {
+            anyhow::bail!(
+                "{} already holds frames of another run (e.g. {}); use an empty --out directory",
+                dir.display(),
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A progress bar on stderr, hidden when stderr is not a terminal.
+fn progress_bar(len: u64) -> ProgressBar {
+    let bar = ProgressBar::new(len);
+    if std::io::stderr().is_terminal() {
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {per_sec}, eta {eta}")
+        {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
+}

@@ -1,0 +1,231 @@
+//! One frame at a time: cast every beam of the sensor pattern from the pose
+//! of frame `k`, turn its echoes into returns, add range noise and write the
+//! points in the sensor frame.
+//!
+//! Frames are independent: frame `k` depends only on the scene, `k` and the
+//! run's seed (through [`frame_seed`]), so they can be generated in any
+//! order or in parallel and the output is identical.
+
+use glam::{DMat3, DVec3};
+
+use super::echo::{BeamTracer, Echo};
+use super::returns;
+use super::scene::Scene;
+use crate::cloud::{Frame, Point};
+use crate::io::StampedPose;
+use crate::rng::SplitMix64;
+
+/// Timestamp of frame 0, seconds (frame `k` is at `EPOCH + k / rate`).
+pub const EPOCH_SECONDS: u64 = 1_700_000_000;
+
+/// Ground truth of one point beyond its label: which surfaces made it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PointTruth {
+    /// Surface that scattered the echo back.
+    pub surface: u32,
+    /// First surface that reflected the path (reflections), else the first
+    /// glass it crossed (obstacles behind glass), else
+    /// [`super::echo::NO_SURFACE`].
+    pub via: u32,
+    /// Specular reflections on the path.
+    pub bounces: u8,
+}
+
+/// A simulated frame with its true pose and per-point truth.
+#[derive(Debug, Clone)]
+pub struct SimFrame {
+    /// The points (sensor frame), labelled.
+    pub frame: Frame,
+    /// True `T_world_sensor`.
+    pub pose: StampedPose,
+    /// Per-point truth, parallel to `frame.points`.
+    pub truth: Vec<PointTruth>,
+}
+
+/// The seed of frame `k`'s noise generator, from the run's seed.
+pub fn frame_seed(seed: u64, k: usize) -> u64 {
+    let mut g = SplitMix64::new(seed);
+    let base = g.next_u64();
+    SplitMix64::new(base ^ (k as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
+}
+
+/// The simulator of one scene: the ray-casting index and the beam pattern,
+/// built once and shared by all frames (and threads).
+#[derive(Debug)]
+pub struct Simulator {
+    scene: Scene,
+    tracer: BeamTracer,
+    /// Unit beam directions in the sensor frame, column-major (all rings
+    /// of a column in turn), without the columns of the blind sector.
+    beams: Vec<DVec3>,
+    min_signal: f64,
+    period_us: u64,
+}
+
+impl Simulator {
+    /// Prepare a scene for simulation.
+    pub fn new(scene: &Scene) -> Self {
+        let sensor = &scene.sensor;
+        let model = &sensor.model;
+        let materials: Vec<_> = scene.materials.iter().map(|m| m.material).collect();
+        let min_signal = sensor.detection_threshold / sensor.intensity_gain;
+        let tracer = BeamTracer::new(
+            &scene.surfaces,
+            &materials,
+            sensor.max_range,
+            sensor.max_bounces,
+            min_signal,
+        );
+        let rings = model.rings();
+        let mut beams = Vec::with_capacity(rings * model.columns);
+        for col in 0..model.columns {
+            if sensor.is_blind(model.column_azimuth_deg(col)) {
+                continue;
+            }
+            for ring in 0..rings {
+                let d = model.beam_direction(ring, col);
+                beams.push(DVec3::new(d.x, d.y, d.z));
+            }
+        }
+        let period_us = (1e6 / model.rate_hz).round().max(1.0) as u64;
+        Self {
+            scene: scene.clone(),
+            tracer,
+            beams,
+            min_signal,
+            period_us,
+        }
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Beams cast per frame (the pattern without the blind sector).
+    pub fn beam_count(&self) -> usize {
+        self.beams.len()
+    }
+
+    /// The beam tracer (for inspecting single beams).
+    pub fn tracer(&self) -> &BeamTracer {
+        &self.tracer
+    }
+
+    /// Name (`{:.6}` seconds) and timestamp of frame `k`.
+    pub fn stamp(&self, k: usize) -> (String, f64) {
+        let us = EPOCH_SECONDS * 1_000_000 + k as u64 * self.period_us;
+        let name = format!("{}.{:06}", us / 1_000_000, us % 1_000_000);
+        let stamp = us as f64 * 1e-6;
+        (name, stamp)
+    }
+
+    /// True pose of frame `k`.
+    pub fn pose(&self, k: usize) -> StampedPose {
+        let t = k as f64 * self.period_us as f64 * 1e-6;
+        StampedPose {
+            stamp: self.stamp(k).1,
+            pose: self.scene.trajectory.pose(t),
+        }
+    }
+
+    /// The detected echoes of one beam (world-frame `origin` and unit `dir`),
+    /// merged and sorted by range, before return selection and noise.
+    pub fn beam_echoes(&self, origin: DVec3, dir: DVec3) -> Vec<Echo> {
+        let mut echoes = Vec::new();
+        self.echoes_into(origin, dir, &mut echoes);
+        echoes
+    }
+
+    #[inline]
+    fn echoes_into(&self, origin: DVec3, dir: DVec3, echoes: &mut Vec<Echo>) {
+        let model = &self.scene.sensor.model;
+        echoes.clear();
+        self.tracer.trace(origin, dir, echoes);
+        returns::merge(echoes, model.range_resolution);
+        returns::detect(
+            echoes,
+            self.min_signal,
+            model.min_range,
+            self.scene.sensor.max_range,
+        );
+    }
+
+    /// Simulate frame `k` with the run's `seed`.
+    pub fn frame(&self, k: usize, seed: u64) -> SimFrame {
+        let sensor = &self.scene.sensor;
+        let model = &sensor.model;
+        let pose = self.pose(k);
+        let (name, stamp) = self.stamp(k);
+        let q = pose.pose.rotation.to_rotation_matrix();
+        let m = q.matrix();
+        let rot = DMat3::from_cols(
+            DVec3::new(m[(0, 0)], m[(1, 0)], m[(2, 0)]),
+            DVec3::new(m[(0, 1)], m[(1, 1)], m[(2, 1)]),
+            DVec3::new(m[(0, 2)], m[(1, 2)], m[(2, 2)]),
+        );
+        let tr = pose.pose.translation.vector;
+        let origin = DVec3::new(tr.x, tr.y, tr.z);
+        let mut rng = SplitMix64::new(frame_seed(seed, k));
+        let crop = sensor.crop_range.unwrap_or(f64::INFINITY);
+        let res = model.range_resolution;
+        let rings = model.rings();
+        let mut points = Vec::with_capacity(self.beams.len() + self.beams.len() / 16);
+        let mut truth = Vec::with_capacity(points.capacity());
+        let mut echoes = Vec::with_capacity(8);
+        for (i, &dir_s) in self.beams.iter().enumerate() {
+            let ring = (i % rings) as u16;
+            self.echoes_into(origin, rot * dir_s, &mut echoes);
+            let (first, second) = returns::select(&echoes, model.return_mode);
+            let Some(first) = first else { continue };
+            let r1 = noisy(first.range, sensor.range_noise, &mut rng);
+            let second = second.map(|e| (e, noisy(e.range, sensor.range_noise, &mut rng)));
+            if r1 > crop {
+                continue;
+            }
+            let mut emit = |e: &Echo, r: f64, ret: u8| {
+                let p = dir_s * r;
+                points.push(Point {
+                    xyz: [p.x as f32, p.y as f32, p.z as f32],
+                    intensity: (e.signal * sensor.intensity_gain).min(255.0).round() as f32,
+                    ring,
+                    ret,
+                    label: e.label,
+                });
+                truth.push(PointTruth {
+                    surface: e.surface,
+                    via: e.via,
+                    bounces: e.bounces,
+                });
+            };
+            emit(&first, r1, 1);
+            if let Some((e, r2)) = second {
+                // As 3DRef: return 2 only where it differs from return 1.
+                if r2 <= crop && (r2 - r1).abs() > res {
+                    emit(&e, r2, 2);
+                }
+            }
+        }
+        SimFrame {
+            frame: Frame {
+                name,
+                stamp,
+                points,
+                has_labels: true,
+            },
+            pose,
+            truth,
+        }
+    }
+}
+
+/// `range + sigma · N(0, 1)`, never negative; no random draw when `sigma`
+/// is zero.
+#[inline]
+fn noisy(range: f64, sigma: f64, rng: &mut SplitMix64) -> f64 {
+    if sigma > 0.0 {
+        (range + sigma * rng.normal()).max(0.0)
+    } else {
+        range
+    }
+}
