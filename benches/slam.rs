@@ -76,7 +76,7 @@ fn main() {
             d += start.elapsed().as_secs_f64();
             let start = Instant::now();
             let mut planes = ex.extract(f, &scan, &detection, frame_seed(1, &f.name));
-            planes.extend(reflective_planes(f, &detection));
+            planes.extend(reflective_planes(f, &detection, &config.extractor));
             e += start.elapsed().as_secs_f64();
             count += planes.len();
             if let Some(prev) = &previous {

@@ -88,9 +88,14 @@ pub fn run(args: SlamArgs) -> Result<()> {
             r.frame_inliers,
             r.map_matches,
             r.inliers,
-            r.degeneracy.count(),
-            r.degeneracy.describe(&r.pose),
-            r.degeneracy.min_eigenvalue(),
+            r.degenerate_directions(),
+            r.degeneracy
+                .as_ref()
+                .map(|d| d.describe(&r.pose))
+                .unwrap_or_default(),
+            r.degeneracy
+                .as_ref()
+                .map_or(f64::NAN, |d| d.min_eigenvalue()),
             r.fallback,
             r.landmarks,
             t.as_secs_f64() * 1e3
@@ -108,11 +113,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         Some(t) => Some(trajectory_error(&slam.poses, t, config.slam.rpe_segment)?),
         None => None,
     };
-    let degenerate = slam
-        .reports
-        .iter()
-        .filter(|r| r.degeneracy.is_degenerate())
-        .count();
+    let degenerate = slam.reports.iter().filter(|r| r.is_degenerate()).count();
     let fallback = slam.reports.iter().filter(|r| r.fallback).count();
     let total: f64 = slam.frame_times.iter().map(|d| d.as_secs_f64()).sum();
     let fps = slam.reports.len() as f64 / total.max(1e-12);

@@ -62,6 +62,10 @@ pub struct ExtractorParams {
     pub min_density: f64,
     /// ... needs at least this many inliers (paper: 500).
     pub sparse_min_points: usize,
+    /// Reflective planes enter registration as their largest patch of
+    /// inliers linked within this distance in the plane, m (see
+    /// [`reflective_planes`](super::reflective_planes)).
+    pub reflective_link: f64,
 }
 
 impl Default for ExtractorParams {
@@ -83,6 +87,7 @@ impl Default for ExtractorParams {
             min_area: 0.3,
             min_density: 100.0,
             sparse_min_points: 500,
+            reflective_link: 0.5,
         }
     }
 }

@@ -18,7 +18,8 @@
 //!    the hull, centroid and area of every plane ([`FramePlane`]).
 //!
 //! The reflective planes of the [`ReflectiveDetector`](crate::reflect::ReflectiveDetector)
-//! join the frame's planes as their own kind ([`reflective_planes`]).
+//! join the frame's planes as their own kind ([`reflective`]: the largest
+//! connected patch of each plane's inliers, refitted).
 //! Extractors are selected by name (`[extractor] name = ...`) through the
 //! [`PlaneExtractor`] trait.
 
@@ -26,11 +27,13 @@ pub mod extractor;
 pub mod filter;
 pub mod ground;
 pub mod normals;
+pub mod reflective;
 pub mod region_growing;
 
 pub use extractor::{ExtractorName, ExtractorParams, RegionGrowingExtractor};
 pub use filter::CellCloud;
 pub use normals::{NormalParams, OrganizedNormals};
+pub use reflective::reflective_planes;
 pub use region_growing::RegionParams;
 
 use nalgebra::{Isometry3, Point2, Point3, Vector3};
@@ -186,32 +189,6 @@ pub trait PlaneExtractor: Send + Sync {
         detection: &Detection,
         seed: u64,
     ) -> Vec<FramePlane>;
-}
-
-/// The detector's reflective planes as frame planes of kind `Reflective`
-/// (hull and chart as detected; centroid of the RANSAC inliers).
-pub fn reflective_planes(frame: &Frame, detection: &Detection) -> Vec<FramePlane> {
-    detection
-        .planes
-        .iter()
-        .filter(|rp| !rp.bounded.boundary.is_empty() && !rp.inliers.is_empty())
-        .map(|rp| {
-            let sum: Vector3<f64> = rp
-                .inliers
-                .iter()
-                .map(|&i| frame.points[i as usize].position().coords)
-                .sum();
-            FramePlane {
-                kind: PlaneKind::Reflective,
-                plane: rp.bounded.plane,
-                chart: rp.bounded.chart,
-                hull: rp.bounded.boundary.clone(),
-                centroid: Point3::from(sum / rp.inliers.len() as f64),
-                area: rp.bounded.boundary.area(),
-                inliers: rp.inliers.clone(),
-            }
-        })
-        .collect()
 }
 
 /// Synthetic scans for the tests: the QT64 beam pattern cast against

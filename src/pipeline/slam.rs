@@ -20,7 +20,7 @@ use super::single_scan::check_frame;
 use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
 use crate::cloud::Frame;
 use crate::config::Config;
-use crate::frontend::{reflective_planes, FramePlane, PlaneExtractor};
+use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtractor};
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::{OrganizedScan, SensorModel};
@@ -49,13 +49,16 @@ fn extractor_seed(seed: u64, name: &str) -> u64 {
 }
 
 /// The planes of one frame (sensor frame): ground and ordinary planes from
-/// `extractor`, then the reflective planes of `detector`. Also returns the
+/// `extractor`, then the reflective planes of `detector` (their largest
+/// patches, see [`reflective_planes`]; `extractor_params` gives the gap and
+/// acceptance rule). Also returns the
 /// time spent per stage.
 pub fn frame_planes(
     frame: &Frame,
     sensor: &SensorModel,
     detector: &dyn ReflectiveDetector,
     extractor: &dyn PlaneExtractor,
+    extractor_params: &ExtractorParams,
     seed: u64,
 ) -> Result<(Vec<FramePlane>, StageTimings)> {
     let mut t = StageTimings::default();
@@ -67,7 +70,7 @@ pub fn frame_planes(
     t.add("detect", start.elapsed());
     let start = Instant::now();
     let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
-    planes.extend(reflective_planes(frame, &detection));
+    planes.extend(reflective_planes(frame, &detection, extractor_params));
     t.add("extract", start.elapsed());
     t.frames = 1;
     Ok((planes, t))
@@ -98,6 +101,7 @@ pub fn run_slam(
                 &sensor,
                 detector.as_ref(),
                 extractor.as_ref(),
+                &config.extractor,
                 config.seed,
             )
         })

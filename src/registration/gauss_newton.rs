@@ -19,8 +19,17 @@
 //!
 //! Each iteration solves `JᵀJ δ = −Jᵀe` in the observable subspace only
 //! (see [`Degeneracy`]): unobservable directions keep the initial value.
+//!
+//! Anchoring: the offset row couples rotation with the target frame's
+//! origin (`∂e₄/∂φ` grows with `‖t‖`), so in a world frame whose origin is
+//! far from the sensor the normal equations condition badly and their
+//! eigenvalues — the degeneracy test — would depend on where the world
+//! origin happens to be. [`refine`] therefore evaluates the same residual in
+//! the target frame shifted to the initial sensor position (`t₀`): target
+//! offsets become `d_t + n_t·t₀` and the translation `t − t₀`, which is
+//! small; the result is shifted back.
 
-use nalgebra::{Isometry3, Matrix4x6, Matrix6, Vector4, Vector6};
+use nalgebra::{Isometry3, Matrix4x6, Matrix6, Translation3, UnitQuaternion, Vector4, Vector6};
 use serde::{Deserialize, Serialize};
 
 use super::{Correspondence, Degeneracy};
@@ -34,9 +43,12 @@ pub struct GaussNewtonParams {
     pub max_iterations: usize,
     /// Stop when the step's norm falls below this.
     pub min_step: f64,
-    /// Eigenvalues of `JᵀJ` at or below this mark unobservable directions
-    /// (one unit-normal pair contributes up to 1 per direction it
-    /// constrains).
+    /// Eigenvalues of `JᵀJ` at or below this mark unobservable directions.
+    /// One unit-normal pair contributes `cos²` of the angle between its
+    /// normal and a translation direction, so 0.25 asks for a plane within
+    /// 60° of it; the position error along a direction is about the offset
+    /// noise over `√λ`, so weaker directions are better left to the motion
+    /// model.
     pub degeneracy_threshold: f64,
 }
 
@@ -45,7 +57,7 @@ impl Default for GaussNewtonParams {
         Self {
             max_iterations: 10,
             min_step: 1e-9,
-            degeneracy_threshold: 0.05,
+            degeneracy_threshold: 0.25,
         }
     }
 }
@@ -115,8 +127,31 @@ fn normal_equations(
     (h, g, cost)
 }
 
-/// Refine `init` over `pairs` (every pair an inlier).
+/// Refine `init` over `pairs` (every pair an inlier), anchored at the
+/// initial sensor position (see the module documentation).
 pub fn refine(
+    pairs: &[Correspondence],
+    init: &Isometry3<f64>,
+    params: &GaussNewtonParams,
+) -> Refinement {
+    let anchor = init.translation.vector;
+    let shift = Translation3::from(-anchor);
+    let anchored: Vec<Correspondence> = pairs
+        .iter()
+        .map(|c| Correspondence {
+            target: c
+                .target
+                .transformed(&Isometry3::from_parts(shift, UnitQuaternion::identity())),
+            ..*c
+        })
+        .collect();
+    let mut r = refine_at(&anchored, &(shift * init), params);
+    r.pose = Translation3::from(anchor) * r.pose;
+    r
+}
+
+/// [`refine`] without anchoring.
+fn refine_at(
     pairs: &[Correspondence],
     init: &Isometry3<f64>,
     params: &GaussNewtonParams,
@@ -192,6 +227,40 @@ mod tests {
         assert!(r.cost < 1e-20, "{}", r.cost);
         assert!(se3::local(&truth, &r.pose).norm() < 1e-9);
         assert!(!r.degeneracy.is_degenerate());
+    }
+
+    #[test]
+    fn the_degeneracy_analysis_does_not_depend_on_the_world_origin() {
+        let truth = Isometry3::new(Vector3::new(0.1, 0.2, 0.0), Vector3::new(0.0, 0.0, 0.3));
+        let pairs: Vec<_> = [
+            (Vector3::z(), 1.5),
+            (Vector3::x(), 2.0),
+            (Vector3::y(), 3.0),
+            (Vector3::new(1.0, 1.0, 0.0), 2.5),
+        ]
+        .iter()
+        .map(|(n, d)| pair(*n, *d, &truth))
+        .collect();
+        let params = GaussNewtonParams::default();
+        let near = refine(&pairs, &truth, &params).degeneracy.eigenvalues;
+        // The same problem with the world origin moved 50 m away.
+        let far_origin = Isometry3::translation(30.0, -40.0, 0.0);
+        let moved: Vec<_> = pairs
+            .iter()
+            .map(|c| Correspondence {
+                target: c.target.transformed(&far_origin),
+                ..*c
+            })
+            .collect();
+        let r = refine(&moved, &(far_origin * truth), &params);
+        for (a, b) in near.iter().zip(&r.degeneracy.eigenvalues) {
+            assert!(
+                (a - b).abs() < 1e-9,
+                "{near:?} vs {:?}",
+                r.degeneracy.eigenvalues
+            );
+        }
+        assert!(se3::local(&(far_origin * truth), &r.pose).norm() < 1e-9);
     }
 
     #[test]

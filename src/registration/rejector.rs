@@ -56,7 +56,7 @@ impl Default for RejectorParams {
             inlier_offset: 0.1,
             min_pair_angle_deg: 15.0,
             max_hypotheses: 2000,
-            min_eigenvalue: 0.05,
+            min_eigenvalue: 0.25,
         }
     }
 }

@@ -7,6 +7,14 @@
 //! smaller hull. Normal and offset gates (as in frame matching) come first;
 //! kinds must agree. Each frame plane is associated with the landmark of
 //! largest overlap ratio.
+//!
+//! The offset gate is the distance of the frame plane's centroid from the
+//! landmark plane, not the difference of the offsets `d`: in the world
+//! frame `d` is measured at the world origin, so two estimates of one
+//! plane whose normals differ by a degree differ in `d` by 0.17 m per 10 m
+//! between the plane and the origin — the gate would depend on where the
+//! world frame happens to be. (Frame-to-frame matching compares `d` in the
+//! sensor frames, where the origin is the sensor, as the paper does.)
 
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
@@ -23,7 +31,8 @@ use crate::registration::Correspondence;
 pub struct MapMatchParams {
     /// World-frame normals must have a larger cosine.
     pub min_normal_cos: f64,
-    /// World-frame offsets must differ by less, m.
+    /// The frame plane's centroid must be closer than this to the landmark
+    /// plane, m.
     pub max_offset: f64,
     /// Overlap area over the smaller hull's area must reach this (paper:
     /// 0.7).
@@ -65,12 +74,13 @@ pub fn associate(
     let mut out = Vec::new();
     for (i, fp) in planes.iter().enumerate() {
         let world = fp.plane.transformed(pose);
+        let centroid = pose * fp.centroid;
         let corners: Vec<_> = fp.hull_3d().iter().map(|p| pose * p).collect();
         let mut best: Option<(f64, usize)> = None;
         for (j, l) in map.landmarks.iter().enumerate() {
             if l.kind != fp.kind
                 || !(world.normal_cosine(&l.plane) > params.min_normal_cos)
-                || !((world.d - l.plane.d).abs() < params.max_offset)
+                || !(l.plane.signed_distance(&centroid).abs() < params.max_offset)
             {
                 continue;
             }

@@ -3,7 +3,7 @@
 //!
 //! The paper's "Global Map Update", made robust where it falls short:
 //!
-//! 1. [`motion`]: predict the pose (constant velocity).
+//! 1. [`motion`]: predict the pose (constant velocity, bounded acceleration).
 //! 2. Frame-to-frame registration ([`crate::registration`]) from the
 //!    prediction gives the initial global pose.
 //! 3. [`association`]: frame planes (moved to the world) against the map's
@@ -27,5 +27,5 @@ pub mod motion;
 pub mod tracker;
 
 pub use association::{associate, MapMatchParams};
-pub use motion::{MotionModel, MotionModelName};
+pub use motion::{MotionModel, MotionModelName, MotionParams};
 pub use tracker::{FrameReport, SlamParams, Tracker};

@@ -5,7 +5,7 @@ use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
-use super::motion::{MotionModel, MotionModelName};
+use super::motion::{MotionModel, MotionParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
 use crate::map::{MapMerger, PlaneMap};
@@ -19,7 +19,7 @@ use crate::registration::{
 #[serde(default, deny_unknown_fields)]
 pub struct SlamParams {
     /// The motion model that predicts each pose.
-    pub motion_model: MotionModelName,
+    pub motion: MotionParams,
     /// Register each frame to the previous one before the map (the paper);
     /// without it the prediction alone starts scan-to-map.
     pub frame_to_frame: bool,
@@ -41,10 +41,22 @@ pub struct SlamParams {
     pub rpe_segment: f64,
 }
 
+impl FrameReport {
+    /// Number of unobservable directions (0 for the first frame).
+    pub fn degenerate_directions(&self) -> usize {
+        self.degeneracy.as_ref().map_or(0, Degeneracy::count)
+    }
+
+    /// Whether some direction of the pose came from the motion model.
+    pub fn is_degenerate(&self) -> bool {
+        self.degenerate_directions() > 0
+    }
+}
+
 impl Default for SlamParams {
     fn default() -> Self {
         Self {
-            motion_model: MotionModelName::ConstantVelocity,
+            motion: MotionParams::default(),
             frame_to_frame: true,
             use_reflective: true,
             frame_matching: MatchCriteria::default(),
@@ -73,8 +85,10 @@ pub struct FrameReport {
     pub map_matches: usize,
     /// Of those, the inliers of the scan-to-map registration.
     pub inliers: usize,
-    /// Eigen-analysis of the final scan-to-map information matrix.
-    pub degeneracy: Degeneracy,
+    /// Eigen-analysis of the final scan-to-map information matrix; `None`
+    /// for the first frame (it defines the world frame, nothing is
+    /// registered).
+    pub degeneracy: Option<Degeneracy>,
     /// The pose came from the motion model alone (no registration).
     pub fallback: bool,
     /// Landmarks in the map after the update.
@@ -118,7 +132,7 @@ impl Tracker {
             rejector,
             merger,
             map: PlaneMap::new(),
-            motion: MotionModel::new(params.motion_model),
+            motion: MotionModel::new(params.motion),
             previous: None,
             frames: 0,
             origin,
@@ -155,7 +169,7 @@ impl Tracker {
             frame_inliers: 0,
             map_matches: 0,
             inliers: 0,
-            degeneracy: Degeneracy::none_observable(p.gauss_newton.degeneracy_threshold),
+            degeneracy: None,
             fallback: false,
             landmarks: 0,
             pruned: 0,
@@ -202,11 +216,14 @@ impl Tracker {
                         for &k in &reg.inliers {
                             matched[pairs[k].source_index].get_or_insert(pairs[k].target_index);
                         }
-                        report.degeneracy = reg.refinement.degeneracy;
+                        report.degeneracy = Some(reg.refinement.degeneracy);
                         reg.pose
                     }
                     None => {
                         report.fallback = true;
+                        report.degeneracy = Some(Degeneracy::none_observable(
+                            p.gauss_newton.degeneracy_threshold,
+                        ));
                         initial
                     }
                 }

@@ -1,0 +1,122 @@
+//! Reflective planes as SLAM landmarks.
+//!
+//! The detector fits its planes to candidate points of the whole scan, so a
+//! plane's inliers may join separate surfaces that happen to lie on one
+//! plane: a mirror-clad column and the far end of a glass railing, a pane
+//! and a reflection patch. For classification that only widens the hull;
+//! for registration it tilts the plane (a few far inliers on a lever arm of
+//! metres) and makes its hull, centroid and area jump from frame to frame.
+//! A reflective plane therefore enters the frame's planes as the largest
+//! patch of its inliers — connected in the plane's chart under a link of
+//! `reflective_link` metres (glass candidates are sparse: only beams with a
+//! second return count, so grid neighbours are often missing) — refitted
+//! by least squares; patches under `min_area` are dropped.
+
+use super::extractor::ExtractorParams;
+use super::FramePlane;
+use crate::cloud::Frame;
+use crate::geometry::cluster::euclidean_clusters;
+use crate::geometry::fit::fit_plane;
+use crate::io::PlaneKind;
+use crate::reflect::Detection;
+
+/// The detector's planes as frame planes of kind `Reflective` (see the
+/// module documentation); `params` gives the link distance of a patch and
+/// the smallest area kept.
+pub fn reflective_planes(
+    frame: &Frame,
+    detection: &Detection,
+    params: &ExtractorParams,
+) -> Vec<FramePlane> {
+    let mut out = Vec::new();
+    for rp in &detection.planes {
+        let chart = &rp.bounded.chart;
+        let uv: Vec<_> = rp
+            .inliers
+            .iter()
+            .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
+            .collect();
+        let labels = euclidean_clusters(&uv, params.reflective_link);
+        let mut sizes = vec![0usize; labels.iter().max().map_or(0, |m| m + 1)];
+        for &l in &labels {
+            sizes[l] += 1;
+        }
+        // The largest patch (the first found on ties).
+        let Some(best) = (0..sizes.len()).max_by(|&a, &b| sizes[a].cmp(&sizes[b]).then(b.cmp(&a)))
+        else {
+            continue;
+        };
+        let patch: Vec<u32> = rp
+            .inliers
+            .iter()
+            .zip(&labels)
+            .filter(|(_, &l)| l == best)
+            .map(|(&i, _)| i)
+            .collect();
+        let points = || patch.iter().map(|&i| frame.points[i as usize].position());
+        let Some((plane, _)) = fit_plane(points()) else {
+            continue;
+        };
+        if let Some(fp) = FramePlane::from_inliers(PlaneKind::Reflective, plane, frame, patch) {
+            if fp.area >= params.min_area {
+                out.push(fp);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frontend::testing::{cast, Rect};
+    use crate::geometry::Plane;
+    use crate::reflect::{BoundedPlane, ReflectivePlane};
+    use nalgebra::Point3;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn a_far_strip_on_the_same_plane_does_not_tilt_the_landmark() {
+        // A mirror x = 3 (y in [-1, 1]) and, 4 m away on nearly the same
+        // plane, a strip of other points at x = 3.1: one RANSAC plane for the
+        // detector, two patches for us.
+        let frame = cast(
+            &[
+                Rect::between(Point3::new(3.0, -1.0, -1.0), Point3::new(3.0, 1.0, 1.5)),
+                Rect::between(Point3::new(3.1, 4.5, -1.0), Point3::new(3.1, 5.0, 1.5)),
+            ],
+            0.0,
+        );
+        let inliers: Vec<u32> = (0..frame.points.len() as u32).collect();
+        let tilted = fit_plane(frame.points.iter().map(|p| p.position()))
+            .unwrap()
+            .0;
+        let detection = Detection {
+            candidates: inliers.clone(),
+            planes: vec![ReflectivePlane {
+                bounded: BoundedPlane::from_points(
+                    tilted.facing(&Point3::origin()),
+                    frame.points.iter().map(|p| p.position()),
+                ),
+                inliers,
+            }],
+        };
+        let planes = reflective_planes(&frame, &detection, &ExtractorParams::default());
+        assert_eq!(planes.len(), 1);
+        let p = &planes[0];
+        let truth = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 3.0).unwrap();
+        assert!(
+            p.plane.normal.dot(&truth.normal) > 1.0 - 1e-9,
+            "{:?}",
+            p.plane
+        );
+        assert!((p.plane.d - 3.0).abs() < 1e-6);
+        assert!(
+            p.centroid.y.abs() < 0.2 && p.area < 5.1,
+            "{} {}",
+            p.centroid,
+            p.area
+        );
+        assert!(tilted.normal.dot(&truth.normal).abs() < 1.0 - 1e-4);
+    }
+}
