@@ -10,7 +10,8 @@
 //! patch of its inliers — connected in the plane's chart under a link of
 //! `reflective_link` metres (glass candidates are sparse: only beams with a
 //! second return count, so grid neighbours are often missing) — refitted
-//! by least squares; patches under `min_area` are dropped.
+//! by least squares; patches under `min_area` are dropped. A link of 0
+//! takes the detector's planes as they are (the paper).
 
 use super::extractor::ExtractorParams;
 use super::FramePlane;
@@ -18,7 +19,8 @@ use crate::cloud::Frame;
 use crate::geometry::cluster::euclidean_clusters;
 use crate::geometry::fit::fit_plane;
 use crate::io::PlaneKind;
-use crate::reflect::Detection;
+use crate::reflect::{Detection, ReflectivePlane};
+use nalgebra::{Point3, Vector3};
 
 /// The detector's planes as frame planes of kind `Reflective` (see the
 /// module documentation); `params` gives the link distance of a patch and
@@ -30,6 +32,13 @@ pub fn reflective_planes(
 ) -> Vec<FramePlane> {
     let mut out = Vec::new();
     for rp in &detection.planes {
+        if !(params.reflective_link > 0.0) {
+            // The detector's plane as it is (the paper).
+            if let Some(fp) = as_detected(frame, rp) {
+                out.push(fp);
+            }
+            continue;
+        }
         let chart = &rp.bounded.chart;
         let uv: Vec<_> = rp
             .inliers
@@ -66,13 +75,33 @@ pub fn reflective_planes(
     out
 }
 
+/// The detector's plane, hull and inliers unchanged.
+fn as_detected(frame: &Frame, rp: &ReflectivePlane) -> Option<FramePlane> {
+    if rp.bounded.boundary.is_empty() || rp.inliers.is_empty() {
+        return None;
+    }
+    let sum: Vector3<f64> = rp
+        .inliers
+        .iter()
+        .map(|&i| frame.points[i as usize].position().coords)
+        .sum();
+    Some(FramePlane {
+        kind: PlaneKind::Reflective,
+        plane: rp.bounded.plane,
+        chart: rp.bounded.chart,
+        hull: rp.bounded.boundary.clone(),
+        centroid: Point3::from(sum / rp.inliers.len() as f64),
+        area: rp.bounded.boundary.area(),
+        inliers: rp.inliers.clone(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::frontend::testing::{cast, Rect};
     use crate::geometry::Plane;
     use crate::reflect::{BoundedPlane, ReflectivePlane};
-    use nalgebra::Point3;
     use nalgebra::Vector3;
 
     #[test]
