@@ -7,20 +7,20 @@
 //! for registration it tilts the plane (a few far inliers on a lever arm of
 //! metres) and makes its hull, centroid and area jump from frame to frame.
 //! A reflective plane therefore enters the frame's planes as the largest
-//! patch of its inliers — connected in the plane's chart under a link of
-//! `reflective_link` metres (glass candidates are sparse: only beams with a
-//! second return count, so grid neighbours are often missing) — refitted
-//! by least squares; patches under `min_area` are dropped. A link of 0
+//! patch of its inliers — connected in the plane's chart: inliers fall into
+//! square cells of `reflective_link` metres, and touching occupied cells
+//! (8-neighbourhood) form a patch (glass candidates are sparse: only beams
+//! with a second return count, so sensor-grid neighbours are often missing)
+//! — refitted by least squares; patches under `min_area` are dropped. A link of 0
 //! takes the detector's planes as they are (the paper).
 
 use super::extractor::ExtractorParams;
 use super::FramePlane;
 use crate::cloud::Frame;
-use crate::geometry::cluster::euclidean_clusters;
 use crate::geometry::fit::fit_plane;
 use crate::io::PlaneKind;
 use crate::reflect::{Detection, ReflectivePlane};
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Point2, Point3, Vector3};
 
 /// The detector's planes as frame planes of kind `Reflective` (see the
 /// module documentation); `params` gives the link distance of a patch and
@@ -45,7 +45,7 @@ pub fn reflective_planes(
             .iter()
             .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
             .collect();
-        let labels = euclidean_clusters(&uv, params.reflective_link);
+        let labels = grid_components(&uv, params.reflective_link);
         let mut sizes = vec![0usize; labels.iter().max().map_or(0, |m| m + 1)];
         for &l in &labels {
             sizes[l] += 1;
@@ -73,6 +73,55 @@ pub fn reflective_planes(
         }
     }
     out
+}
+
+/// Patch label of every point: points in touching occupied square cells of
+/// side `cell` share a label. Labels are numbered by first appearance in
+/// the input order (deterministic); `O(n log n)`, no hashing.
+fn grid_components(points: &[Point2<f64>], cell: f64) -> Vec<usize> {
+    let key = |p: &Point2<f64>| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
+    let keys: Vec<(i64, i64)> = points.iter().map(key).collect();
+    let mut cells = keys.clone();
+    cells.sort_unstable();
+    cells.dedup();
+    // Component of every occupied cell, by flood fill over the sorted keys.
+    let mut comp = vec![usize::MAX; cells.len()];
+    let mut stack = Vec::new();
+    let mut next = 0;
+    for start in 0..cells.len() {
+        if comp[start] != usize::MAX {
+            continue;
+        }
+        comp[start] = next;
+        stack.push(start);
+        while let Some(c) = stack.pop() {
+            let (x, y) = cells[c];
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    if let Ok(n) = cells.binary_search(&(x + dx, y + dy)) {
+                        if comp[n] == usize::MAX {
+                            comp[n] = next;
+                            stack.push(n);
+                        }
+                    }
+                }
+            }
+        }
+        next += 1;
+    }
+    // Renumber by first appearance in the input.
+    let mut renumber = vec![usize::MAX; next];
+    let mut count = 0;
+    keys.iter()
+        .map(|k| {
+            let c = comp[cells.binary_search(k).unwrap_or(0)];
+            if renumber[c] == usize::MAX {
+                renumber[c] = count;
+                count += 1;
+            }
+            renumber[c]
+        })
+        .collect()
 }
 
 /// The detector's plane, hull and inliers unchanged.
@@ -103,6 +152,20 @@ mod tests {
     use crate::geometry::Plane;
     use crate::reflect::{BoundedPlane, ReflectivePlane};
     use nalgebra::Vector3;
+
+    #[test]
+    fn touching_cells_form_one_patch() {
+        let p = |x: f64, y: f64| Point2::new(x, y);
+        let pts = [
+            p(0.1, 0.1),
+            p(5.0, 5.0),
+            p(0.6, 0.1),
+            p(1.4, 0.9),
+            p(5.2, 5.1),
+            p(-3.0, 0.0),
+        ];
+        assert_eq!(grid_components(&pts, 0.5), vec![0, 1, 0, 0, 1, 2]);
+    }
 
     #[test]
     fn a_far_strip_on_the_same_plane_does_not_tilt_the_landmark() {

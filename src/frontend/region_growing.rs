@@ -130,7 +130,7 @@ pub fn grow_regions(
         }
     }
     // Stable: equal sizes keep their discovery order.
-    ranges.sort_by(|a, b| (b.1 - b.0).cmp(&(a.1 - a.0)));
+    ranges.sort_by_key(|r| std::cmp::Reverse(r.1 - r.0));
     ranges
         .into_iter()
         .map(|(s, e)| members[s..e].to_vec())

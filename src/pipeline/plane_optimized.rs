@@ -16,7 +16,7 @@ use nalgebra::{Isometry3, Point3};
 use rayon::prelude::*;
 
 use super::registry::{detector, frame_seed, merger, plane_map_classifier};
-use super::single_scan::check_frame;
+use super::single_scan::check_sequence;
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
@@ -49,9 +49,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         Error::Input("the plane-optimized method needs a pose per frame (--poses FILE)".into())
     })?;
     let sensor = SensorModel::resolve(&config.sensor)?;
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
+    check_sequence(sequence, config)?;
     let detector = detector(config, &sensor);
     let mut timings = StageTimings::default();
 

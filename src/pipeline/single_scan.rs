@@ -12,20 +12,29 @@ use crate::reflect::CandidateSource;
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
-/// Check that a frame can be processed by the configured detector.
-pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) -> Result<()> {
-    let frame = &sequence.frames[index];
-    if frame.points.is_empty() {
-        return Err(Error::Input(format!(
-            "{}: frame has no points",
-            sequence.path(index).display()
-        )));
+/// Check that the sequence can be processed by the configured detector:
+/// no frame may be empty, and the dual-return detector needs second returns
+/// in at least one frame (a single frame without any, e.g. facing only
+/// walls, is normal in a long dual-return sequence; a sequence without any
+/// is single-return data).
+pub(crate) fn check_sequence(sequence: &Sequence, config: &Config) -> Result<()> {
+    for (index, frame) in sequence.frames.iter().enumerate() {
+        if frame.points.is_empty() {
+            return Err(Error::Input(format!(
+                "{}: frame has no points",
+                sequence.path(index).display()
+            )));
+        }
     }
-    if config.detector.name == CandidateSource::DualReturn && frame.second_returns() == 0 {
+    if config.detector.name == CandidateSource::DualReturn
+        && !sequence.is_empty()
+        && sequence.frames.iter().all(|f| f.second_returns() == 0)
+    {
         return Err(Error::Input(format!(
-            "{}: frame has no second return; the dual-return detector needs dual-return data \
-             (use [detector] name = \"intensity-peak\" for single-return scans)",
-            sequence.path(index).display()
+            "{}: frame has no second return (nor has any other frame); the dual-return \
+             detector needs dual-return data (use [detector] name = \"intensity-peak\" for \
+             single-return scans)",
+            sequence.path(0).display()
         )));
     }
     Ok(())
@@ -38,9 +47,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
     let sensor = SensorModel::resolve(&config.sensor)?;
     let detector = detector(config, &sensor);
     let classifier = single_scan_classifier(config);
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
+    check_sequence(sequence, config)?;
     let results: Vec<(FrameOutput, StageTimings)> = sequence
         .frames
         .par_iter()

@@ -16,7 +16,7 @@ use nalgebra::Isometry3;
 use rayon::prelude::*;
 
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
-use super::single_scan::check_frame;
+use super::single_scan::check_sequence;
 use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
 use crate::cloud::Frame;
 use crate::config::Config;
@@ -85,9 +85,7 @@ pub fn run_slam(
 ) -> Result<SlamOutput> {
     let wall = Instant::now();
     let sensor = SensorModel::resolve(&config.sensor)?;
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
+    check_sequence(sequence, config)?;
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
 
