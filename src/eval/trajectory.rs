@@ -17,11 +17,16 @@ use crate::{Error, Result};
 
 /// The rigid transform `T` minimising `Σ ‖target_i − T source_i‖²`
 /// (Umeyama 1991 without scale; the determinant is corrected so the result
-/// is a rotation). `None` when the lists are empty or differ in length.
+/// is a rotation). `None` when the lists are empty, differ in length or
+/// hold non-finite coordinates.
 /// For collinear points the rotation about their line is arbitrary (it
 /// does not change the residuals).
 pub fn umeyama(source: &[Point3<f64>], target: &[Point3<f64>]) -> Option<Isometry3<f64>> {
     if source.is_empty() || source.len() != target.len() {
+        return None;
+    }
+    let finite = |p: &Point3<f64>| p.iter().all(|v| v.is_finite());
+    if !(source.iter().all(finite) && target.iter().all(finite)) {
         return None;
     }
     let n = source.len() as f64;

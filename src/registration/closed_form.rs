@@ -33,6 +33,9 @@ pub fn rotation(pairs: &[Correspondence]) -> Option<UnitQuaternion<f64>> {
     for c in pairs {
         h += c.source.normal * c.target.normal.transpose();
     }
+    if !h.iter().all(|v| v.is_finite()) {
+        return None;
+    }
     let svd = h.svd(true, true);
     let (u, v_t) = (svd.u?, svd.v_t?);
     let s = svd.singular_values;
@@ -69,6 +72,9 @@ pub fn translation(
         let r = c.source.d - c.target.d - n.dot(prior);
         ata += n * n.transpose();
         atr += n * r;
+    }
+    if !(ata.iter().all(|v| v.is_finite()) && atr.iter().all(|v| v.is_finite())) {
+        return (*prior, 0);
     }
     let eig = SymmetricEigen::new(ata);
     let mut delta = Vector3::zeros();

@@ -24,8 +24,12 @@ pub struct Degeneracy {
 }
 
 impl Degeneracy {
-    /// Analyse `information` (symmetric positive semi-definite).
+    /// Analyse `information` (symmetric positive semi-definite); a matrix
+    /// with non-finite entries observes nothing.
     pub fn of(information: &Matrix6<f64>, threshold: f64) -> Self {
+        if !information.iter().all(|v| v.is_finite()) {
+            return Self::none_observable(threshold);
+        }
         let eig = SymmetricEigen::new(*information);
         let mut order = [0usize, 1, 2, 3, 4, 5];
         order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
