@@ -68,7 +68,10 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
         .filter(|&k| grid.cell_state(k) == Surface::Opaque)
         .filter(|&k| {
             let (i, j) = ((k % grid.cols) as isize, (k / grid.cols) as isize);
-            !(is_opaque(i - 1, j) && is_opaque(i + 1, j) && is_opaque(i, j - 1) && is_opaque(i, j + 1))
+            !(is_opaque(i - 1, j)
+                && is_opaque(i + 1, j)
+                && is_opaque(i, j - 1)
+                && is_opaque(i, j + 1))
         })
         .map(|k| grid.centre(k))
         .collect();

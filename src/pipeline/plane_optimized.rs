@@ -15,8 +15,8 @@ use std::time::Instant;
 use nalgebra::{Isometry3, Point3};
 use rayon::prelude::*;
 
-use super::registry::{detector, frame_seed, merger, plane_map_classifier};
-use super::single_scan::check_frame;
+use super::registry::{detector, merger, plane_map_classifier};
+use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
@@ -59,16 +59,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     let per_frame: Vec<(OrganizedScan, Detection, StageTimings)> = sequence
         .frames
         .par_iter()
-        .map(|frame| {
-            let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = OrganizedScan::build(frame, &sensor)?;
-            t.add("pair", start.elapsed());
-            let start = Instant::now();
-            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
-            t.add("detect", start.elapsed());
-            Ok((scan, detection, t))
-        })
+        .map(|frame| organize_and_detect(frame, &sensor, detector.as_ref(), config.seed))
         .collect::<Result<_>>()?;
     for (_, _, t) in &per_frame {
         timings.merge(t);

@@ -7,8 +7,9 @@ use rayon::prelude::*;
 use super::registry::{detector, frame_seed, single_scan_classifier};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::FrameInput;
+use crate::cloud::Frame;
 use crate::config::Config;
-use crate::reflect::CandidateSource;
+use crate::reflect::{CandidateSource, Detection, ReflectiveDetector};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
@@ -31,6 +32,24 @@ pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) ->
     Ok(())
 }
 
+/// Pair a frame's returns on the sensor grid and detect its reflective
+/// planes (the per-frame front of every pipeline), timing both stages.
+pub(crate) fn organize_and_detect(
+    frame: &Frame,
+    sensor: &SensorModel,
+    detector: &dyn ReflectiveDetector,
+    seed: u64,
+) -> Result<(OrganizedScan, Detection, StageTimings)> {
+    let mut t = StageTimings::default();
+    let start = Instant::now();
+    let scan = OrganizedScan::build(frame, sensor)?;
+    t.add("pair", start.elapsed());
+    let start = Instant::now();
+    let detection = detector.detect(frame, &scan, frame_seed(seed, &frame.name));
+    t.add("detect", start.elapsed());
+    Ok((scan, detection, t))
+}
+
 /// Run the single-scan method over every frame (in parallel; the result does
 /// not depend on the thread count).
 pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput> {
@@ -45,13 +64,8 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
         .frames
         .par_iter()
         .map(|frame| {
-            let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = OrganizedScan::build(frame, &sensor)?;
-            t.add("pair", start.elapsed());
-            let start = Instant::now();
-            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
-            t.add("detect", start.elapsed());
+            let (scan, detection, mut t) =
+                organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
                 frame,
