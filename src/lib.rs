@@ -28,6 +28,7 @@
 
 // `!(x > 0.0)` is used deliberately: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![warn(missing_docs)]
 
 pub mod classify;
 pub mod cloud;
