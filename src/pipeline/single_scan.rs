@@ -13,7 +13,8 @@ use crate::reflect::{CandidateSource, Detection, ReflectiveDetector};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
-/// Check that a frame can be processed by the configured detector.
+/// Check that a frame can be processed by the configured detector: it has
+/// points, and the sequence carries dual returns when the detector needs them.
 pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) -> Result<()> {
     let frame = &sequence.frames[index];
     if frame.points.is_empty() {
@@ -22,9 +23,25 @@ pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) ->
             sequence.path(index).display()
         )));
     }
-    if config.detector.name == CandidateSource::DualReturn && frame.second_returns() == 0 {
+    // A frame without second returns is normal inside a dual-return sequence
+    // (no glass in view); a sequence without any is not dual-return data.
+    let dual_data = || {
+        sequence
+            .frames
+            .iter()
+            .any(|f| f.points.iter().any(|p| p.ret == 2))
+    };
+    if config.detector.name == CandidateSource::DualReturn
+        && frame.second_returns() == 0
+        && !dual_data()
+    {
+        let what = if sequence.len() == 1 {
+            "frame"
+        } else {
+            "no frame of the sequence"
+        };
         return Err(Error::Input(format!(
-            "{}: frame has no second return; the dual-return detector needs dual-return data \
+            "{}: {what} has no second return; the dual-return detector needs dual-return data \
              (use [detector] name = \"intensity-peak\" for single-return scans)",
             sequence.path(index).display()
         )));
