@@ -13,6 +13,7 @@ use specular::pipeline::{
 };
 use specular::reflect::BoundedPlane;
 
+use super::visual::{write_visual, VisualOptions};
 use super::{load_config, MethodArg};
 
 /// Arguments of `detect`.
@@ -36,6 +37,9 @@ pub struct DetectArgs {
     /// Print milliseconds per frame for every stage.
     #[arg(long)]
     pub timings: bool,
+    /// Do not write the Foxglove recording `run.mcap`.
+    #[arg(long)]
+    pub no_mcap: bool,
 }
 
 /// Run `detect`.
@@ -47,6 +51,18 @@ pub fn run(args: DetectArgs) -> Result<()> {
     let (sequence, mut output, map) = detect(&args.frames, args.poses.as_deref(), &config)?;
     let start = std::time::Instant::now();
     write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
+    let visual = VisualOptions {
+        mcap: !args.no_mcap,
+        title: format!("specular detect: {}", args.frames.display()),
+    };
+    write_visual(
+        &args.out,
+        &config,
+        &sequence,
+        &output,
+        map.as_ref(),
+        &visual,
+    )?;
     output.timings.add("write outputs", start.elapsed());
     output.timings.wall += start.elapsed();
     println!(
@@ -69,6 +85,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if args.timings {
         print!("{}", output.timings.table());
     }
+    println!("report: {}", args.out.join("report.md").display());
     Ok(())
 }
 
