@@ -169,3 +169,99 @@ fn single_scan_without_poses_still_reports() {
     assert!(out.path().join("metrics.png").exists());
     assert!(out.path().join("report.md").exists());
 }
+
+/// Write the bundled sample as a ROS 2 bag (CDR PointCloud2 on `/points`,
+/// plus an unrelated topic) with the mcap crate.
+fn write_sample_bag(path: &Path) {
+    use specular::io::ros2_bag::{encode_pointcloud2, POINTCLOUD2, POINTCLOUD2_SCHEMA};
+    let entries = specular::io::list_frames(&common::sample_dir().join("frames")).unwrap();
+    let paths: Vec<_> = entries.into_iter().map(|e| e.path).collect();
+    let frames = specular::io::read_frames(&paths).unwrap();
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut w = mcap::Writer::new(file).unwrap();
+    let schema = w
+        .add_schema(POINTCLOUD2, "ros2msg", POINTCLOUD2_SCHEMA.as_bytes())
+        .unwrap();
+    let points = w
+        .add_channel(schema, "/points", "cdr", &BTreeMap::new())
+        .unwrap();
+    let other = w
+        .add_channel(0, "/chatter", "json", &BTreeMap::new())
+        .unwrap();
+    // Reverse order: the reader sorts by stamp.
+    for (k, f) in frames.iter().enumerate().rev() {
+        let t = (f.stamp * 1e9) as u64;
+        let header = |channel_id| mcap::records::MessageHeader {
+            channel_id,
+            sequence: k as u32,
+            log_time: t,
+            publish_time: t,
+        };
+        w.write_to_known_channel(&header(points), &encode_pointcloud2(f, "lidar"))
+            .unwrap();
+        w.write_to_known_channel(&header(other), b"{}").unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir.join("predictions"))
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().into_string().unwrap(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_ros2_bag_gives_the_same_predictions_as_the_ply_frames() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bag = tmp.path().join("sample.mcap");
+    write_sample_bag(&bag);
+    let from_ply = tmp.path().join("ply");
+    let o = detect_sample(&from_ply, &["--no-mcap"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let from_bag = tmp.path().join("bag");
+    let poses = common::sample_dir().join("poses.txt");
+    let run = |topic: &str| {
+        Command::new(env!("CARGO_BIN_EXE_specular"))
+            .args([
+                "detect",
+                "--bag",
+                bag.to_str().unwrap(),
+                "--topic",
+                topic,
+                "--poses",
+                poses.to_str().unwrap(),
+                "--out",
+                from_bag.to_str().unwrap(),
+                "--no-mcap",
+            ])
+            .output()
+            .unwrap()
+    };
+    let o = run("/points");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (a, b) = (predictions(&from_ply), predictions(&from_bag));
+    assert_eq!(a.len(), 3);
+    assert_eq!(a, b, "identical predictions from the bag");
+    assert_eq!(
+        std::fs::read(from_ply.join("metrics.json")).unwrap(),
+        std::fs::read(from_bag.join("metrics.json")).unwrap()
+    );
+    // A wrong topic names the topics present.
+    let o = run("/nope");
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("/points") && err.contains("/chatter"), "{err}");
+    // A topic of another type is a clear error.
+    let o = run("/chatter");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains(POINTCLOUD2_NAME));
+}
+
+const POINTCLOUD2_NAME: &str = "sensor_msgs/msg/PointCloud2";
