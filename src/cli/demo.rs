@@ -4,8 +4,9 @@
 //!    in memory and run the plane-optimized pipeline with its true poses.
 //! 2. Run the same pipeline on the bundled real 3DRef sample.
 //!
-//! Both are scored against their labels; outputs go to `OUT/sim` and
-//! `OUT/real`.
+//! Both are scored against their labels; outputs (predictions, maps, plots,
+//! `run.mcap`, `report.md`) go to `OUT/sim` and
+//! `OUT/real`, with an index in `OUT/report.md`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -17,7 +18,7 @@ use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
 use super::detect::{detect, run_method, write_outputs};
-use super::visual::{write_visual, VisualOptions};
+use super::visual::{write_index, write_visual, VisualOptions};
 use super::{bundled_sample, load_config};
 
 /// Arguments of `demo`.
@@ -65,7 +66,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         &sequence,
         &output,
         map.as_ref(),
-        &visual(&args, sim_title),
+        &visual(&args, sim_title.clone()),
     )?;
     println!(
         "specular demo 1/2: simulated scene '{}' ({} frames, simulated in {:.1} s), plane-optimized with true poses",
@@ -100,7 +101,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         &sequence,
         &output,
         map.as_ref(),
-        &visual(&args, real_title),
+        &visual(&args, real_title.clone()),
     )?;
     println!(
         "\nspecular demo 2/2: {} real 3DRef frames ({}), plane-optimized",
@@ -111,6 +112,9 @@ pub fn run(args: DemoArgs) -> Result<()> {
         print!("{}", conf.metrics().table());
     }
     print_outputs(&real_out, args.no_mcap);
+    let parts = [(sim_title, "sim"), (real_title, "real")];
+    write_index(&args.out, "specular demo", &parts, !args.no_mcap)?;
+    println!("\nindex: {}", args.out.join("report.md").display());
     Ok(())
 }
 

@@ -148,3 +148,29 @@ fn command_line() -> String {
         .collect::<Vec<_>>()
         .join(" ")
 }
+
+/// `OUT/report.md` of a run made of parts (each with its own report in a
+/// subdirectory): links to the parts' reports and top-down maps.
+pub(crate) fn write_index(
+    out: &Path,
+    title: &str,
+    parts: &[(String, &str)],
+    mcap: bool,
+) -> Result<()> {
+    let mut s = format!("# {title}\n\n");
+    for (name, dir) in parts {
+        let recording = if mcap {
+            format!(", [Foxglove recording]({dir}/run.mcap)")
+        } else {
+            String::new()
+        };
+        s.push_str(&format!(
+            "## {name}\n\n[report]({dir}/report.md){recording}, [map]({dir}/map.ply)\n\n![{name}]({dir}/topdown.png)\n\n"
+        ));
+    }
+    s.push_str(&format!("Command line: `{}`\n", command_line()));
+    io::write_atomic(&out.join("report.md"), |w| {
+        std::io::Write::write_all(w, s.as_bytes())
+    })?;
+    Ok(())
+}
