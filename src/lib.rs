@@ -21,6 +21,7 @@
 //! | [`pipeline`] | wiring: runs a method over a sequence of frames |
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
+//! | [`viz`] | Foxglove MCAP recordings, PNG plots, Markdown report |
 //!
 //! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
 //! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
@@ -39,9 +40,11 @@ pub mod geometry;
 pub mod io;
 pub mod map;
 pub mod pipeline;
+pub mod progress;
 pub mod reflect;
 pub mod rng;
 pub mod sensor;
 pub mod sim;
+pub mod viz;
 
 pub use error::{Error, Result};

@@ -56,11 +56,17 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     let mut timings = StageTimings::default();
 
     // 1. Per-frame detection (sensor frame), in parallel.
+    let bar = crate::progress::bar(sequence.len(), "detect");
     let per_frame: Vec<(OrganizedScan, Detection, StageTimings)> = sequence
         .frames
         .par_iter()
-        .map(|frame| organize_and_detect(frame, &sensor, detector.as_ref(), config.seed))
+        .map(|frame| {
+            let out = organize_and_detect(frame, &sensor, detector.as_ref(), config.seed);
+            bar.inc(1);
+            out
+        })
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
     for (_, _, t) in &per_frame {
         timings.merge(t);
     }
@@ -84,6 +90,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     let mut map_planes: Vec<BoundedPlane> =
         used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
+    tracing::info!(
+        landmarks = map.landmarks.len(),
+        used = used.len(),
+        "reflective plane map fused"
+    );
 
     // Transparency evidence of every used landmark over all frames, and the
     // panes found in it.
@@ -130,6 +141,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         .sequence_support
         .then(|| sequence_support(&classifier, sequence.len(), &input));
     timings.add("support", start.elapsed());
+    let bar = crate::progress::bar(sequence.len(), "classify");
     let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
         .into_par_iter()
         .map(|k| {
@@ -138,9 +150,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
                 support: support.as_ref(),
                 ..input(k)
             });
+            bar.inc(1);
             (classes, start.elapsed())
         })
         .collect();
+    bar.finish_and_clear();
     let mut frames = Vec::with_capacity(sequence.len());
     for (k, (classes, d)) in classified.into_iter().enumerate() {
         timings.add("classify", d);
@@ -240,6 +254,29 @@ pub fn around_corner_map(
                 out.push(map_point(pose * q, Class::Reflection, true));
             }
             out
+        })
+        .collect();
+    thin(per_frame.into_iter().flatten(), voxel)
+}
+
+/// The accumulated classified map in the world frame: every classified point
+/// where it was measured (reflections included, not mirrored); unclassified
+/// points are left out. Thinned to one point per `voxel` per class (0 keeps
+/// all). Empty without poses.
+pub fn measured_map(sequence: &Sequence, classes: &[Vec<Class>], voxel: f64) -> Vec<MapPoint> {
+    let Some(poses) = &sequence.poses else {
+        return Vec::new();
+    };
+    let per_frame: Vec<Vec<MapPoint>> = (0..sequence.len().min(classes.len()))
+        .into_par_iter()
+        .map(|k| {
+            sequence.frames[k]
+                .points
+                .iter()
+                .zip(&classes[k])
+                .filter(|(_, c)| **c != Class::Unclassified)
+                .map(|(pt, &class)| map_point(poses[k] * pt.position(), class, false))
+                .collect()
         })
         .collect();
     thin(per_frame.into_iter().flatten(), voxel)

@@ -77,9 +77,11 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
     for i in 0..sequence.len() {
         check_frame(sequence, i, config)?;
     }
+    let bar = crate::progress::bar(sequence.len(), "classify");
     let results: Vec<(FrameOutput, StageTimings)> = sequence
         .frames
         .par_iter()
+        .inspect(|_| bar.inc(1))
         .map(|frame| {
             let (scan, detection, mut t) =
                 organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
@@ -106,6 +108,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
             ))
         })
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
     let mut timings = StageTimings::default();
     let mut frames = Vec::with_capacity(results.len());
     for (out, t) in results {
