@@ -47,6 +47,10 @@ pub struct DetectArgs {
     /// Do not write the Foxglove recording `run.mcap`.
     #[arg(long)]
     pub no_mcap: bool,
+    /// Write only the results (predictions, metrics, planes.json,
+    /// around_corner.ply): no map.ply, recording, plots or report.
+    #[arg(long)]
+    pub lean: bool,
 }
 
 /// Run `detect`.
@@ -65,18 +69,20 @@ pub fn run(args: DetectArgs) -> Result<()> {
     };
     let start = std::time::Instant::now();
     write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
-    let visual = VisualOptions {
-        mcap: !args.no_mcap,
-        title: format!("specular detect: {}", input.display()),
-    };
-    write_visual(
-        &args.out,
-        &config,
-        &sequence,
-        &output,
-        map.as_ref(),
-        &visual,
-    )?;
+    if !args.lean {
+        let visual = VisualOptions {
+            mcap: !args.no_mcap,
+            title: format!("specular detect: {}", input.display()),
+        };
+        write_visual(
+            &args.out,
+            &config,
+            &sequence,
+            &output,
+            map.as_ref(),
+            &visual,
+        )?;
+    }
     output.timings.add("write outputs", start.elapsed());
     output.timings.wall += start.elapsed();
     println!(

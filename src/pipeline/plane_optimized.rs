@@ -136,10 +136,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         support: None,
     };
     let start = Instant::now();
-    let support = classifier
-        .params()
-        .sequence_support
-        .then(|| sequence_support(&classifier, sequence.len(), &input));
+    let support = classifier.params().sequence_support.then(|| {
+        let p = classifier.params();
+        let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
+        sequence_support(&classifier, &views, &input)
+    });
     timings.add("support", start.elapsed());
     let bar = crate::progress::bar(sequence.len(), "classify");
     let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
@@ -193,14 +194,34 @@ pub fn observations(
         .collect()
 }
 
-/// The observed surfaces of every frame (world frame), thinned by voxel.
+/// Frames that see the scene from a new viewpoint: the first, then every
+/// frame whose pose moved more than `min_move` metres or turned more than
+/// `min_turn_deg` from the last one kept. Views from (nearly) the same place
+/// add no surface the support does not have already.
+pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> Vec<usize> {
+    let mut kept: Vec<usize> = Vec::new();
+    for (k, pose) in poses.iter().enumerate() {
+        let new_view = kept.last().is_none_or(|&last| {
+            let rel = poses[last].inverse() * pose;
+            rel.translation.vector.norm() > min_move
+                || rel.rotation.angle().to_degrees() > min_turn_deg
+        });
+        if new_view {
+            kept.push(k);
+        }
+    }
+    kept
+}
+
+/// The observed surfaces of the keyframes (world frame), thinned by voxel.
 fn sequence_support<'a>(
     classifier: &PlaneMapClassifier,
-    frames: usize,
+    frames: &[usize],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
 ) -> WorldSupport {
-    let per_frame: Vec<Vec<Point3<f64>>> = (0..frames)
-        .into_par_iter()
+    let per_frame: Vec<Vec<Point3<f64>>> = frames
+        .par_iter()
+        .copied()
         .map(|k| {
             let inp = input(k);
             classifier
