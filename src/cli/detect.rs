@@ -105,7 +105,9 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if args.timings {
         print!("{}", output.timings.table());
     }
-    println!("report: {}", args.out.join("report.md").display());
+    if !args.lean {
+        println!("report: {}", args.out.join("report.md").display());
+    }
     Ok(())
 }
 
