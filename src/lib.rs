@@ -24,6 +24,7 @@
 //! | [`pipeline`] | wiring: runs a method over a sequence of frames |
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
+//! | [`viz`] | Foxglove MCAP recordings, PNG plots, Markdown report |
 //!
 //! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
 //! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
@@ -31,6 +32,7 @@
 
 // `!(x > 0.0)` is used deliberately: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![warn(missing_docs)]
 
 pub mod classify;
 pub mod cloud;
@@ -42,11 +44,13 @@ pub mod geometry;
 pub mod io;
 pub mod map;
 pub mod pipeline;
+pub mod progress;
 pub mod reflect;
 pub mod registration;
 pub mod rng;
 pub mod sensor;
 pub mod sim;
 pub mod slam;
+pub mod viz;
 
 pub use error::{Error, Result};

@@ -20,22 +20,29 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// `specular detect` on the bundled sample with its poses, writing to `out`.
+fn detect_sample(out: &Path, extra: &[&str]) -> Output {
+    let sample = common::sample_dir();
+    let frames = sample.join("frames");
+    let poses = sample.join("poses.txt");
+    let mut args = vec![
+        "detect",
+        "--frames",
+        s(&frames),
+        "--poses",
+        s(&poses),
+        "--out",
+        s(out),
+    ];
+    args.extend_from_slice(extra);
+    specular(&args)
+}
+
 #[test]
 fn detect_then_eval_on_the_sample() {
     let sample = common::sample_dir();
     let out = tempfile::tempdir().unwrap();
-    let o = specular(&[
-        "detect",
-        "--frames",
-        s(&sample.join("frames")),
-        "--poses",
-        s(&sample.join("poses.txt")),
-        "--out",
-        s(out.path()),
-        "--method",
-        "single-scan",
-        "--timings",
-    ]);
+    let o = detect_sample(out.path(), &["--method", "single-scan", "--timings"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -160,17 +167,8 @@ fn an_unknown_config_is_a_clear_error() {
 
 #[test]
 fn plane_optimized_writes_the_map_files() {
-    let sample = common::sample_dir();
     let out = tempfile::tempdir().unwrap();
-    let o = specular(&[
-        "detect",
-        "--frames",
-        s(&sample.join("frames")),
-        "--poses",
-        s(&sample.join("poses.txt")),
-        "--out",
-        s(out.path()),
-    ]);
+    let o = detect_sample(out.path(), &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     let planes = specular::io::read_planes(&out.path().join("planes.json")).unwrap();
     assert_eq!(planes.len(), 1);

@@ -21,6 +21,11 @@ pub struct PlaneMapParams {
     pub sequence_support: bool,
     /// Voxel size used to thin the sequence's surface points, m.
     pub support_voxel: f64,
+    /// A frame adds its surfaces to the support when the sensor moved this
+    /// far since the last frame that did, m (0 adds every frame).
+    pub support_keyframe_move: f64,
+    /// ... or turned this much, degrees.
+    pub support_keyframe_turn_deg: f64,
     /// The decision thresholds and switches.
     pub decision: DecisionParams,
 }
@@ -31,6 +36,8 @@ impl Default for PlaneMapParams {
             hull_margin: 0.0,
             sequence_support: false,
             support_voxel: 0.05,
+            support_keyframe_move: 0.0,
+            support_keyframe_turn_deg: 0.0,
             decision: DecisionParams {
                 depth_margin: 0.1,
                 obstacle_tests_on_all_returns: true,

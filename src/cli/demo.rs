@@ -4,8 +4,9 @@
 //!    in memory and run the plane-optimized pipeline with its true poses.
 //! 2. Run the same pipeline on the bundled real 3DRef sample.
 //!
-//! Both are scored against their labels; outputs go to `OUT/sim` and
-//! `OUT/real`.
+//! Both are scored against their labels; outputs (predictions, maps, plots,
+//! `run.mcap`, `report.md`) go to `OUT/sim` and
+//! `OUT/real`, with an index in `OUT/report.md`.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -17,6 +18,7 @@ use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
 use super::detect::{detect, run_method, write_outputs};
+use super::visual::{write_index, write_visual, VisualOptions};
 use super::{bundled_sample, load_config};
 
 /// Arguments of `demo`.
@@ -31,6 +33,9 @@ pub struct DemoArgs {
     /// Built-in scene name or scene TOML to simulate.
     #[arg(long, default_value = "demo")]
     pub scene: String,
+    /// Do not write the Foxglove recordings `run.mcap`.
+    #[arg(long)]
+    pub no_mcap: bool,
 }
 
 /// Run the demo.
@@ -54,6 +59,15 @@ pub fn run(args: DemoArgs) -> Result<()> {
         run_method(&sequence, &config).context("plane-optimized on the simulated scene")?;
     let sim_out = args.out.join("sim");
     write_outputs(&sim_out, &config, &sequence, &output, map.as_ref())?;
+    let sim_title = format!("specular demo: simulated scene '{}'", args.scene);
+    write_visual(
+        &sim_out,
+        &config,
+        &sequence,
+        &output,
+        map.as_ref(),
+        &visual(&args, sim_title.clone()),
+    )?;
     println!(
         "specular demo 1/2: simulated scene '{}' ({} frames, simulated in {:.1} s), plane-optimized with true poses",
         args.scene,
@@ -66,7 +80,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     if let Some(map) = &map {
         println!("  reflective landmarks used: {}", map.used.len());
     }
-    println!("  outputs: {}", sim_out.display());
+    print_outputs(&sim_out, args.no_mcap);
 
     // 2. Real sample.
     let mut config = load_config(&args.config)?;
@@ -80,6 +94,15 @@ pub fn run(args: DemoArgs) -> Result<()> {
     .with_context(|| format!("running the demo on {}", sample.display()))?;
     let real_out = args.out.join("real");
     write_outputs(&real_out, &config, &sequence, &output, map.as_ref())?;
+    let real_title = "specular demo: bundled 3DRef sample".to_string();
+    write_visual(
+        &real_out,
+        &config,
+        &sequence,
+        &output,
+        map.as_ref(),
+        &visual(&args, real_title.clone()),
+    )?;
     println!(
         "\nspecular demo 2/2: {} real 3DRef frames ({}), plane-optimized",
         sequence.len(),
@@ -88,6 +111,37 @@ pub fn run(args: DemoArgs) -> Result<()> {
     if let Some(conf) = output.confusion(&sequence) {
         print!("{}", conf.metrics().table());
     }
-    println!("  outputs: {}", real_out.display());
+    print_outputs(&real_out, args.no_mcap);
+    let parts = [(sim_title, "sim"), (real_title, "real")];
+    write_index(&args.out, "specular demo", &parts, !args.no_mcap)?;
+    println!("\nindex: {}", args.out.join("report.md").display());
     Ok(())
+}
+
+fn visual(args: &DemoArgs, title: String) -> VisualOptions {
+    VisualOptions {
+        mcap: !args.no_mcap,
+        title,
+    }
+}
+
+/// Where the outputs of one part are.
+fn print_outputs(dir: &std::path::Path, no_mcap: bool) {
+    println!("  outputs: {}", dir.display());
+    println!("    report     {}", dir.join("report.md").display());
+    if !no_mcap {
+        println!(
+            "    Foxglove   {} (Open local file; 3D panel; colour /cloud by `class`)",
+            dir.join("run.mcap").display()
+        );
+    }
+    println!(
+        "    maps       {} (as measured), {} (reflections mirrored back)",
+        dir.join("map.ply").display(),
+        dir.join("around_corner.ply").display()
+    );
+    println!(
+        "    plots      {}, trajectory.png, metrics.png",
+        dir.join("topdown.png").display()
+    );
 }

@@ -13,14 +13,22 @@ use specular::pipeline::{
 };
 use specular::reflect::BoundedPlane;
 
+use super::visual::{write_visual, VisualOptions};
 use super::{load_config, MethodArg};
 
 /// Arguments of `detect`.
 #[derive(Args, Debug)]
 pub struct DetectArgs {
     /// Directory of 3DRef frames (`<timestamp>.ply`).
+    #[arg(long, required_unless_present = "bag")]
+    pub frames: Option<PathBuf>,
+    /// ROS 2 bag (`.mcap`) of `sensor_msgs/msg/PointCloud2` frames, instead
+    /// of `--frames`.
+    #[arg(long, conflicts_with = "frames", requires = "topic")]
+    pub bag: Option<PathBuf>,
+    /// The bag's point-cloud topic.
     #[arg(long)]
-    pub frames: PathBuf,
+    pub topic: Option<String>,
     /// TUM pose file (`T_world_sensor`); frames are matched by timestamp.
     #[arg(long)]
     pub poses: Option<PathBuf>,
@@ -36,6 +44,13 @@ pub struct DetectArgs {
     /// Print milliseconds per frame for every stage.
     #[arg(long)]
     pub timings: bool,
+    /// Do not write the Foxglove recording `run.mcap`.
+    #[arg(long)]
+    pub no_mcap: bool,
+    /// Write only the results (predictions, metrics, planes.json,
+    /// around_corner.ply): no map.ply, recording, plots or report.
+    #[arg(long)]
+    pub lean: bool,
 }
 
 /// Run `detect`.
@@ -44,9 +59,30 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if let Some(m) = args.method {
         config.method = m.into();
     }
-    let (sequence, mut output, map) = detect(&args.frames, args.poses.as_deref(), &config)?;
+    let (input, (sequence, mut output, map)) = match (&args.frames, &args.bag) {
+        (Some(frames), _) => (frames, detect(frames, args.poses.as_deref(), &config)?),
+        (None, Some(bag)) => {
+            let topic = args.topic.as_deref().unwrap_or_default();
+            (bag, detect_bag(bag, topic, args.poses.as_deref(), &config)?)
+        }
+        (None, None) => bail!("give --frames DIR or --bag FILE --topic NAME"),
+    };
     let start = std::time::Instant::now();
     write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
+    if !args.lean {
+        let visual = VisualOptions {
+            mcap: !args.no_mcap,
+            title: format!("specular detect: {}", input.display()),
+        };
+        write_visual(
+            &args.out,
+            &config,
+            &sequence,
+            &output,
+            map.as_ref(),
+            &visual,
+        )?;
+    }
     output.timings.add("write outputs", start.elapsed());
     output.timings.wall += start.elapsed();
     println!(
@@ -69,6 +105,9 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if args.timings {
         print!("{}", output.timings.table());
     }
+    if !args.lean {
+        println!("report: {}", args.out.join("report.md").display());
+    }
     Ok(())
 }
 
@@ -90,6 +129,33 @@ pub(crate) fn detect(
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     output.timings = timings;
+    Ok((sequence, output, map))
+}
+
+/// Like [`detect`], from the point clouds on `topic` of a ROS 2 bag.
+pub(crate) fn detect_bag(
+    bag: &Path,
+    topic: &str,
+    poses: Option<&Path>,
+    config: &Config,
+) -> Result<(Sequence, RunOutput, Option<PlaneOptimizedOutput>)> {
+    let wall = std::time::Instant::now();
+    if config.method == Method::PlaneOptimized && poses.is_none() {
+        bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
+    }
+    let frames = io::read_bag_frames(bag, topic)?;
+    let mut sequence = Sequence::from_frames(frames, None, &bag.display().to_string())?;
+    if let Some(path) = poses {
+        let stamped = io::read_tum(path)?;
+        sequence.poses = Some(io::match_poses(
+            &sequence.entries,
+            &stamped,
+            config.input.pose_tolerance,
+            path,
+        )?);
+    }
+    let (mut output, map) = run_method(&sequence, config)?;
+    output.timings.wall = wall.elapsed();
     Ok((sequence, output, map))
 }
 

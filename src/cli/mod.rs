@@ -7,7 +7,9 @@ mod detect;
 mod eval;
 mod simulate;
 mod slam;
+mod visual;
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -20,6 +22,12 @@ use specular::config::{Config, Method};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// No progress bars (they are also hidden when stderr is not a terminal).
+    #[arg(short, long, global = true)]
+    quiet: bool,
+    /// Log to stderr: -v info, -vv debug (RUST_LOG overrides).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
 }
 
 #[derive(Subcommand, Debug)]
@@ -71,6 +79,8 @@ pub(crate) fn load_config(name_or_path: &str) -> Result<Config> {
 /// Parse the command line and run the subcommand.
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
+    init_logging(cli.verbose);
+    specular::progress::set_enabled(!cli.quiet && std::io::stderr().is_terminal());
     match cli.command {
         Command::Detect(args) => detect::run(args),
         Command::Slam(args) => slam::run(args),
@@ -83,6 +93,23 @@ pub fn run() -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `tracing` logs on stderr: warnings by default, `-v` info, `-vv` debug;
+/// a `RUST_LOG` filter takes precedence.
+fn init_logging(verbose: u8) {
+    let level = match verbose {
+        0 => "warn",
+        1 => "info",
+        _ => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .try_init();
 }
 
 /// The repository's bundled real sample (for `demo` and the docs).

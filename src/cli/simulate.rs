@@ -1,7 +1,6 @@
 //! `specular simulate`: write a simulated 3DRef-style sequence (frames,
 //! true poses, true reflective planes) from a scene.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -128,10 +127,11 @@ fn refuse_stale_frames(dir: &Path, names: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// A progress bar on stderr, hidden when stderr is not a terminal.
+/// A progress bar on stderr, hidden when stderr is not a terminal or with
+/// `--quiet`.
 fn progress_bar(len: u64) -> ProgressBar {
     let bar = ProgressBar::new(len);
-    if std::io::stderr().is_terminal() {
+    if specular::progress::enabled() {
         if let Ok(style) =
             ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {per_sec}, eta {eta}")
         {

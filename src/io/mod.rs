@@ -1,5 +1,5 @@
-//! Input and output at the edge of the library: 3DRef PLY frames, TUM pose
-//! files, prediction labels, and matching frames to poses by timestamp.
+//! Input and output at the edge of the library: 3DRef PLY frames, ROS 2
+//! bags, TUM pose files, prediction labels, and matching frames to poses by timestamp.
 //!
 //! Every reader returns a [`crate::Error`] naming the file and what is wrong;
 //! every writer writes to a temporary file and renames it into place, so a
@@ -11,6 +11,7 @@ pub mod labels;
 pub mod map_ply;
 pub mod planes;
 pub mod ply;
+pub mod ros2_bag;
 pub mod tum;
 
 pub use atomic::write_atomic;
@@ -19,4 +20,5 @@ pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
+pub use ros2_bag::read_bag_frames;
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

@@ -148,9 +148,14 @@ pub fn fit_boundary(
     q.extend(std::iter::repeat_n(params.inside_weight, ni));
     q.extend(std::iter::repeat_n(params.outside_weight, nj));
     let cones: [SupportedConeT<f64>; 1] = [NonnegativeConeT(row)];
+    // Offsets in metres only need millimetre accuracy: looser tolerances than
+    // clarabel's defaults halve the iterations.
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .max_iter(100)
+        .tol_gap_abs(1e-6)
+        .tol_gap_rel(1e-6)
+        .tol_feas(1e-6)
         .build()
         .ok()?;
     let mut solver = DefaultSolver::new(&p, &q, &a, &rhs, &cones, settings).ok()?;

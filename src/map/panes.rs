@@ -64,7 +64,7 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
             || y as usize >= grid.rows
             || grid.cell_state(y as usize * grid.cols + x as usize) == Surface::Opaque
     };
-    let opaque: Vec<Point2<f64>> = (0..n)
+    let opaque: Vec<usize> = (0..n)
         .filter(|&k| grid.cell_state(k) == Surface::Opaque)
         .filter(|&k| {
             let (i, j) = ((k % grid.cols) as isize, (k / grid.cols) as isize);
@@ -73,7 +73,6 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
                 && is_opaque(i, j - 1)
                 && is_opaque(i, j + 1))
         })
-        .map(|k| grid.centre(k))
         .collect();
     regions
         .into_iter()
@@ -82,18 +81,23 @@ pub fn find_panes(grid: &EvidenceGrid, params: &PaneParams) -> Vec<Pane> {
             // Only the region's border cells constrain a convex boundary: the
             // interior lies in their hull. This keeps the LP small (about the
             // perimeter, not the area, in rows).
-            let inside: Vec<Point2<f64>> = border_cells(grid, &cells)
-                .into_iter()
-                .map(|k| grid.centre(k))
-                .collect();
-            let (lo, hi) = bounds(&inside);
-            let c = params.context;
+            let border = border_cells(grid, &cells);
+            let inside: Vec<Point2<f64>> = border.iter().map(|&k| grid.centre(k)).collect();
+            // Opaque (border) cells within `context` of the pane's border.
+            let reach = (params.context / grid.cell).ceil() as isize;
+            let mut near = vec![false; n];
+            for &k in &border {
+                let (i, j) = ((k % grid.cols) as isize, (k / grid.cols) as isize);
+                for y in (j - reach).max(0)..=(j + reach).min(grid.rows as isize - 1) {
+                    for x in (i - reach).max(0)..=(i + reach).min(grid.cols as isize - 1) {
+                        near[y as usize * grid.cols + x as usize] = true;
+                    }
+                }
+            }
             let outside: Vec<Point2<f64>> = opaque
                 .iter()
-                .filter(|p| {
-                    p.x >= lo.x - c && p.x <= hi.x + c && p.y >= lo.y - c && p.y <= hi.y + c
-                })
-                .copied()
+                .filter(|&&k| near[k])
+                .map(|&k| grid.centre(k))
                 .collect();
             let start = Instant::now();
             let boundary = fit_boundary(&inside, &outside, grid.cell / 2.0, &params.fit)?;
@@ -125,21 +129,6 @@ fn border_cells(grid: &EvidenceGrid, cells: &[usize]) -> Vec<usize> {
             !(member(i - 1, j) && member(i + 1, j) && member(i, j - 1) && member(i, j + 1))
         })
         .collect()
-}
-
-fn bounds(points: &[Point2<f64>]) -> (Point2<f64>, Point2<f64>) {
-    points.iter().fold(
-        (
-            Point2::new(f64::INFINITY, f64::INFINITY),
-            Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
-        ),
-        |(lo, hi), p| {
-            (
-                Point2::new(lo.x.min(p.x), lo.y.min(p.y)),
-                Point2::new(hi.x.max(p.x), hi.y.max(p.y)),
-            )
-        },
-    )
 }
 
 #[cfg(test)]

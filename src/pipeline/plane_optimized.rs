@@ -15,8 +15,8 @@ use std::time::Instant;
 use nalgebra::{Isometry3, Point3};
 use rayon::prelude::*;
 
-use super::registry::{detector, frame_seed, merger, plane_map_classifier};
-use super::single_scan::check_sequence;
+use super::registry::{detector, merger, plane_map_classifier};
+use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
@@ -49,25 +49,24 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         Error::Input("the plane-optimized method needs a pose per frame (--poses FILE)".into())
     })?;
     let sensor = SensorModel::resolve(&config.sensor)?;
-    check_sequence(sequence, config)?;
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
     let detector = detector(config, &sensor);
     let mut timings = StageTimings::default();
 
     // 1. Per-frame detection (sensor frame), in parallel.
+    let bar = crate::progress::bar(sequence.len(), "detect");
     let per_frame: Vec<(OrganizedScan, Detection, StageTimings)> = sequence
         .frames
         .par_iter()
         .map(|frame| {
-            let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = OrganizedScan::build(frame, &sensor)?;
-            t.add("pair", start.elapsed());
-            let start = Instant::now();
-            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
-            t.add("detect", start.elapsed());
-            Ok((scan, detection, t))
+            let out = organize_and_detect(frame, &sensor, detector.as_ref(), config.seed);
+            bar.inc(1);
+            out
         })
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
     for (_, _, t) in &per_frame {
         timings.merge(t);
     }
@@ -91,6 +90,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     let mut map_planes: Vec<BoundedPlane> =
         used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
+    tracing::info!(
+        landmarks = map.landmarks.len(),
+        used = used.len(),
+        "reflective plane map fused"
+    );
 
     // Transparency evidence of every used landmark over all frames, and the
     // panes found in it.
@@ -132,11 +136,13 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         support: None,
     };
     let start = Instant::now();
-    let support = classifier
-        .params()
-        .sequence_support
-        .then(|| sequence_support(&classifier, sequence.len(), &input));
+    let support = classifier.params().sequence_support.then(|| {
+        let p = classifier.params();
+        let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
+        sequence_support(&classifier, &views, &input)
+    });
     timings.add("support", start.elapsed());
+    let bar = crate::progress::bar(sequence.len(), "classify");
     let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
         .into_par_iter()
         .map(|k| {
@@ -145,9 +151,11 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
                 support: support.as_ref(),
                 ..input(k)
             });
+            bar.inc(1);
             (classes, start.elapsed())
         })
         .collect();
+    bar.finish_and_clear();
     let mut frames = Vec::with_capacity(sequence.len());
     for (k, (classes, d)) in classified.into_iter().enumerate() {
         timings.add("classify", d);
@@ -186,14 +194,34 @@ pub fn observations(
         .collect()
 }
 
-/// The observed surfaces of every frame (world frame), thinned by voxel.
+/// Frames that see the scene from a new viewpoint: the first, then every
+/// frame whose pose moved more than `min_move` metres or turned more than
+/// `min_turn_deg` from the last one kept. Views from (nearly) the same place
+/// add no surface the support does not have already.
+pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> Vec<usize> {
+    let mut kept: Vec<usize> = Vec::new();
+    for (k, pose) in poses.iter().enumerate() {
+        let new_view = kept.last().is_none_or(|&last| {
+            let rel = poses[last].inverse() * pose;
+            rel.translation.vector.norm() > min_move
+                || rel.rotation.angle().to_degrees() > min_turn_deg
+        });
+        if new_view {
+            kept.push(k);
+        }
+    }
+    kept
+}
+
+/// The observed surfaces of the keyframes (world frame), thinned by voxel.
 fn sequence_support<'a>(
     classifier: &PlaneMapClassifier,
-    frames: usize,
+    frames: &[usize],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
 ) -> WorldSupport {
-    let per_frame: Vec<Vec<Point3<f64>>> = (0..frames)
-        .into_par_iter()
+    let per_frame: Vec<Vec<Point3<f64>>> = frames
+        .par_iter()
+        .copied()
         .map(|k| {
             let inp = input(k);
             classifier
@@ -247,6 +275,29 @@ pub fn around_corner_map(
                 out.push(map_point(pose * q, Class::Reflection, true));
             }
             out
+        })
+        .collect();
+    thin(per_frame.into_iter().flatten(), voxel)
+}
+
+/// The accumulated classified map in the world frame: every classified point
+/// where it was measured (reflections included, not mirrored); unclassified
+/// points are left out. Thinned to one point per `voxel` per class (0 keeps
+/// all). Empty without poses.
+pub fn measured_map(sequence: &Sequence, classes: &[Vec<Class>], voxel: f64) -> Vec<MapPoint> {
+    let Some(poses) = &sequence.poses else {
+        return Vec::new();
+    };
+    let per_frame: Vec<Vec<MapPoint>> = (0..sequence.len().min(classes.len()))
+        .into_par_iter()
+        .map(|k| {
+            sequence.frames[k]
+                .points
+                .iter()
+                .zip(&classes[k])
+                .filter(|(_, c)| **c != Class::Unclassified)
+                .map(|(pt, &class)| map_point(poses[k] * pt.position(), class, false))
+                .collect()
         })
         .collect();
     thin(per_frame.into_iter().flatten(), voxel)

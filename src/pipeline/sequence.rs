@@ -41,13 +41,18 @@ impl Sequence {
             }
             None => None,
         };
+        let bar = crate::progress::bar(entries.len(), "parse");
         let parsed: Vec<(Frame, Duration)> = entries
             .par_iter()
             .map(|e| {
                 let start = Instant::now();
-                io::read_frame(&e.path).map(|f| (f, start.elapsed()))
+                let frame = io::read_frame(&e.path).map(|f| (f, start.elapsed()));
+                bar.inc(1);
+                frame
             })
             .collect::<Result<_>>()?;
+        bar.finish_and_clear();
+        tracing::debug!(frames = parsed.len(), dir = %dir.display(), "frames parsed");
         let mut frames = Vec::with_capacity(parsed.len());
         for (f, d) in parsed {
             timings.add("parse", d);

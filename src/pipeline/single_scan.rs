@@ -7,37 +7,64 @@ use rayon::prelude::*;
 use super::registry::{detector, frame_seed, single_scan_classifier};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::FrameInput;
+use crate::cloud::Frame;
 use crate::config::Config;
-use crate::reflect::CandidateSource;
+use crate::reflect::{CandidateSource, Detection, ReflectiveDetector};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
-/// Check that the sequence can be processed by the configured detector:
-/// no frame may be empty, and the dual-return detector needs second returns
-/// in at least one frame (a single frame without any, e.g. facing only
-/// walls, is normal in a long dual-return sequence; a sequence without any
-/// is single-return data).
-pub(crate) fn check_sequence(sequence: &Sequence, config: &Config) -> Result<()> {
-    for (index, frame) in sequence.frames.iter().enumerate() {
-        if frame.points.is_empty() {
-            return Err(Error::Input(format!(
-                "{}: frame has no points",
-                sequence.path(index).display()
-            )));
-        }
-    }
-    if config.detector.name == CandidateSource::DualReturn
-        && !sequence.is_empty()
-        && sequence.frames.iter().all(|f| f.second_returns() == 0)
-    {
+/// Check that a frame can be processed by the configured detector: it has
+/// points, and the sequence carries dual returns when the detector needs them.
+pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) -> Result<()> {
+    let frame = &sequence.frames[index];
+    if frame.points.is_empty() {
         return Err(Error::Input(format!(
-            "{}: frame has no second return (nor has any other frame); the dual-return \
-             detector needs dual-return data (use [detector] name = \"intensity-peak\" for \
-             single-return scans)",
-            sequence.path(0).display()
+            "{}: frame has no points",
+            sequence.path(index).display()
+        )));
+    }
+    // A frame without second returns is normal inside a dual-return sequence
+    // (no glass in view); a sequence without any is not dual-return data.
+    let dual_data = || {
+        sequence
+            .frames
+            .iter()
+            .any(|f| f.points.iter().any(|p| p.ret == 2))
+    };
+    if config.detector.name == CandidateSource::DualReturn
+        && frame.second_returns() == 0
+        && !dual_data()
+    {
+        let what = if sequence.len() == 1 {
+            "frame"
+        } else {
+            "no frame of the sequence"
+        };
+        return Err(Error::Input(format!(
+            "{}: {what} has no second return; the dual-return detector needs dual-return data \
+             (use [detector] name = \"intensity-peak\" for single-return scans)",
+            sequence.path(index).display()
         )));
     }
     Ok(())
+}
+
+/// Pair a frame's returns on the sensor grid and detect its reflective
+/// planes (the per-frame front of every pipeline), timing both stages.
+pub(crate) fn organize_and_detect(
+    frame: &Frame,
+    sensor: &SensorModel,
+    detector: &dyn ReflectiveDetector,
+    seed: u64,
+) -> Result<(OrganizedScan, Detection, StageTimings)> {
+    let mut t = StageTimings::default();
+    let start = Instant::now();
+    let scan = OrganizedScan::build(frame, sensor)?;
+    t.add("pair", start.elapsed());
+    let start = Instant::now();
+    let detection = detector.detect(frame, &scan, frame_seed(seed, &frame.name));
+    t.add("detect", start.elapsed());
+    Ok((scan, detection, t))
 }
 
 /// Run the single-scan method over every frame (in parallel; the result does
@@ -47,18 +74,17 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
     let sensor = SensorModel::resolve(&config.sensor)?;
     let detector = detector(config, &sensor);
     let classifier = single_scan_classifier(config);
-    check_sequence(sequence, config)?;
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
+    let bar = crate::progress::bar(sequence.len(), "classify");
     let results: Vec<(FrameOutput, StageTimings)> = sequence
         .frames
         .par_iter()
+        .inspect(|_| bar.inc(1))
         .map(|frame| {
-            let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = OrganizedScan::build(frame, &sensor)?;
-            t.add("pair", start.elapsed());
-            let start = Instant::now();
-            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
-            t.add("detect", start.elapsed());
+            let (scan, detection, mut t) =
+                organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
                 frame,
@@ -82,6 +108,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
             ))
         })
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
     let mut timings = StageTimings::default();
     let mut frames = Vec::with_capacity(results.len());
     for (out, t) in results {

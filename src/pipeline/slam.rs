@@ -16,14 +16,14 @@ use nalgebra::Isometry3;
 use rayon::prelude::*;
 
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
-use super::single_scan::check_sequence;
+use super::single_scan::{check_frame, organize_and_detect};
 use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
 use crate::cloud::Frame;
 use crate::config::Config;
 use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtractor};
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
-use crate::sensor::{OrganizedScan, SensorModel};
+use crate::sensor::SensorModel;
 use crate::slam::{FrameReport, Tracker};
 use crate::Result;
 
@@ -61,13 +61,7 @@ pub fn frame_planes(
     extractor_params: &ExtractorParams,
     seed: u64,
 ) -> Result<(Vec<FramePlane>, StageTimings)> {
-    let mut t = StageTimings::default();
-    let start = Instant::now();
-    let scan = OrganizedScan::build(frame, sensor)?;
-    t.add("pair", start.elapsed());
-    let start = Instant::now();
-    let detection = detector.detect(frame, &scan, frame_seed(seed, &frame.name));
-    t.add("detect", start.elapsed());
+    let (scan, detection, mut t) = organize_and_detect(frame, sensor, detector, seed)?;
     let start = Instant::now();
     let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
     planes.extend(reflective_planes(frame, &detection, extractor_params));
@@ -85,25 +79,31 @@ pub fn run_slam(
 ) -> Result<SlamOutput> {
     let wall = Instant::now();
     let sensor = SensorModel::resolve(&config.sensor)?;
-    check_sequence(sequence, config)?;
+    for i in 0..sequence.len() {
+        check_frame(sequence, i, config)?;
+    }
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
 
     // 1. Front end, in parallel.
+    let bar = crate::progress::bar(sequence.len(), "planes");
     let front: Vec<(Vec<FramePlane>, StageTimings)> = sequence
         .frames
         .par_iter()
         .map(|f| {
-            frame_planes(
+            let out = frame_planes(
                 f,
                 &sensor,
                 detector.as_ref(),
                 extractor.as_ref(),
                 &config.extractor,
                 config.seed,
-            )
+            );
+            bar.inc(1);
+            out
         })
         .collect::<Result<_>>()?;
+    bar.finish_and_clear();
 
     // 2. Tracking, in order.
     let mut timings = StageTimings::default();
@@ -116,6 +116,7 @@ pub fn run_slam(
     let mut poses = Vec::with_capacity(sequence.len());
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
+    let bar = crate::progress::bar(sequence.len(), "track");
     for (k, (planes, t)) in front.into_iter().enumerate() {
         timings.merge(&t);
         let start = Instant::now();
@@ -126,7 +127,15 @@ pub fn run_slam(
         frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);
         poses.push(report.pose);
         reports.push(report);
+        bar.inc(1);
     }
+    bar.finish_and_clear();
+    tracing::info!(
+        frames = reports.len(),
+        landmarks = tracker.map().landmarks.len(),
+        degenerate = reports.iter().filter(|r| r.is_degenerate()).count(),
+        "tracked"
+    );
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     Ok(SlamOutput {

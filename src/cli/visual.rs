@@ -1,0 +1,176 @@
+//! The outputs for people: `map.ply`, `run.mcap`, the PNG plots and
+//! `report.md` (written after `write_outputs`).
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use specular::classify::Class;
+use specular::config::Config;
+use specular::io;
+use specular::pipeline::plane_optimized::measured_map;
+use specular::pipeline::{PlaneOptimizedOutput, RunOutput, Sequence};
+use specular::reflect::BoundedPlane;
+use specular::viz::{self, plots, report::Report, McapRun};
+
+/// Which optional outputs to write.
+#[derive(Debug, Clone)]
+pub(crate) struct VisualOptions {
+    /// Write `run.mcap`.
+    pub mcap: bool,
+    /// Report title.
+    pub title: String,
+}
+
+/// Write the map, recording, plots and report into `out`; returns the
+/// files written (relative names with a description), the report last.
+pub(crate) fn write_visual(
+    out: &Path,
+    config: &Config,
+    sequence: &Sequence,
+    output: &RunOutput,
+    map: Option<&PlaneOptimizedOutput>,
+    options: &VisualOptions,
+) -> Result<Vec<(String, String)>> {
+    let mut files: Vec<(String, String)> = vec![
+        (
+            "predictions/".into(),
+            "one `.label` file per frame (u32 class ids)".into(),
+        ),
+        ("config.toml".into(), "the configuration used".into()),
+    ];
+    let metrics = output.confusion(sequence).map(|c| c.metrics());
+    if metrics.is_some() {
+        files.push(("metrics.json".into(), "scores against the labels".into()));
+    }
+    if map.is_some() {
+        files.push((
+            "planes.json".into(),
+            "reflective plane landmarks (world frame)".into(),
+        ));
+        files.push((
+            "around_corner.ply".into(),
+            "classified map with reflections mirrored back".into(),
+        ));
+    }
+    let planes: &[BoundedPlane] = map.map(|m| m.planes.as_slice()).unwrap_or(&[]);
+    let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
+    let mut plot_list = Vec::new();
+
+    if let Some(poses) = &sequence.poses {
+        let _span = tracing::info_span!("visual outputs").entered();
+        let points = measured_map(sequence, &classes, config.output.map_voxel);
+        io::write_map_ply(&out.join("map.ply"), &points)?;
+        files.push((
+            "map.ply".into(),
+            format!(
+                "classified map, reflections where measured ({} points)",
+                points.len()
+            ),
+        ));
+        tracing::info!(points = points.len(), "map.ply written");
+
+        if options.mcap {
+            let summary = viz::write_run_mcap(
+                &out.join("run.mcap"),
+                &McapRun {
+                    sequence,
+                    classes: &classes,
+                    planes,
+                    hull_margin: config.plane_map.hull_margin,
+                },
+            )?;
+            tracing::info!(?summary, "run.mcap written");
+            files.push((
+                "run.mcap".into(),
+                "Foxglove recording: /cloud, /mirrored, /planes, /tf, /trajectory".into(),
+            ));
+        }
+
+        let trajectory: Vec<[f64; 2]> = poses
+            .iter()
+            .map(|p| [p.translation.vector.x, p.translation.vector.y])
+            .collect();
+        plots::topdown_png(&out.join("topdown.png"), &points, planes, &trajectory)?;
+        plot_list.push(("Top-down map".to_string(), "topdown.png".to_string()));
+        plots::trajectory_png(&out.join("trajectory.png"), &[("poses", trajectory)])?;
+        plot_list.push(("Trajectory".to_string(), "trajectory.png".to_string()));
+    }
+    if let Some(m) = &metrics {
+        plots::metrics_png(&out.join("metrics.png"), m)?;
+        plot_list.push(("Per-class scores".to_string(), "metrics.png".to_string()));
+    }
+    for (_, f) in &plot_list {
+        files.push((f.clone(), "plot".into()));
+    }
+    files.push(("report.md".into(), "this report".into()));
+
+    let mut summary = vec![format!(
+        "{} frames, method {}",
+        sequence.len(),
+        config.method.name()
+    )];
+    if let Some(m) = map {
+        summary.push(format!(
+            "plane map: {} landmarks, {} used (observed at least {} times)",
+            m.map.landmarks.len(),
+            m.used.len(),
+            config.map.min_observations
+        ));
+    }
+    let report = Report {
+        title: options.title.clone(),
+        command_line: command_line(),
+        config_toml: config.to_toml(),
+        metrics: metrics.as_ref(),
+        summary,
+        plots: plot_list,
+        files: files.clone(),
+    };
+    report
+        .write(&out.join("report.md"))
+        .context("writing report.md")?;
+    Ok(files)
+}
+
+/// The command line of this process, shell-quoted where needed.
+fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if !a.is_empty()
+                && a.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./=:,+".contains(c))
+            {
+                a
+            } else {
+                format!("'{}'", a.replace('\'', r"'\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// `OUT/report.md` of a run made of parts (each with its own report in a
+/// subdirectory): links to the parts' reports and top-down maps.
+pub(crate) fn write_index(
+    out: &Path,
+    title: &str,
+    parts: &[(String, &str)],
+    mcap: bool,
+) -> Result<()> {
+    let mut s = format!("# {title}\n\n");
+    for (name, dir) in parts {
+        let recording = if mcap {
+            format!(", [Foxglove recording]({dir}/run.mcap)")
+        } else {
+            String::new()
+        };
+        s.push_str(&format!(
+            "## {name}\n\n[report]({dir}/report.md){recording}, [map]({dir}/map.ply)\n\n![{name}]({dir}/topdown.png)\n\n"
+        ));
+    }
+    s.push_str(&format!("Command line: `{}`\n", command_line()));
+    io::write_atomic(&out.join("report.md"), |w| {
+        std::io::Write::write_all(w, s.as_bytes())
+    })?;
+    Ok(())
+}

@@ -1,0 +1,446 @@
+//! `run.mcap`: a run as a Foxglove recording (protobuf, the `foxglove.*`
+//! schemas), written with the official `foxglove` SDK through a private
+//! [`Context`], so concurrent runs never mix messages.
+//!
+//! | topic | schema | per frame |
+//! |---|---|---|
+//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32 |
+//! | `/mirrored` | `foxglove.PointCloud` | the frame's reflections mirrored back through their plane (`map` frame) |
+//! | `/planes` | `foxglove.SceneUpdate` | each reflective landmark: translucent hull and panes, outlined |
+//! | `/tf` | `foxglove.FrameTransform` | `map` → `lidar` (the sensor pose) |
+//! | `/trajectory` | `foxglove.PosesInFrame` | the sensor poses up to this frame (`map` frame) |
+//!
+//! Log time is the frame timestamp.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use foxglove::messages::{
+    line_primitive, packed_element_field::NumericType, Color, FrameTransform, LinePrimitive,
+    PackedElementField, Point3 as FgPoint3, PointCloud, Pose, PosesInFrame, Quaternion,
+    SceneEntity, SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
+};
+use foxglove::{ChannelBuilder, Context, McapWriter};
+use nalgebra::{Isometry3, Point3};
+
+use crate::classify::mirror::mirror_reflections;
+use crate::classify::Class;
+use crate::pipeline::Sequence;
+use crate::reflect::BoundedPlane;
+use crate::{Error, Result};
+
+/// The world frame's id in the recording.
+pub const WORLD_FRAME: &str = "map";
+/// The sensor frame's id in the recording.
+pub const SENSOR_FRAME: &str = "lidar";
+/// Bytes per point on `/cloud`: x, y, z (f32), class (u8), intensity (f32).
+const CLOUD_STRIDE: u32 = 17;
+/// Bytes per point on `/mirrored`: x, y, z (f32), class (u8).
+const MIRRORED_STRIDE: u32 = 13;
+
+/// What goes into a recording: a sequence with poses, its classes and the
+/// reflective planes (world frame).
+#[derive(Debug, Clone, Copy)]
+pub struct McapRun<'a> {
+    /// The frames and their poses (`T_world_sensor`).
+    pub sequence: &'a Sequence,
+    /// One class per point, per frame.
+    pub classes: &'a [Vec<Class>],
+    /// Reflective planes, world frame.
+    pub planes: &'a [BoundedPlane],
+    /// Hull margin used to mirror reflections back (metres).
+    pub hull_margin: f64,
+}
+
+/// Message counts of a written recording.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct McapSummary {
+    /// Frames recorded (one message per frame on every topic).
+    pub frames: usize,
+    /// Points on `/cloud`, all frames.
+    pub cloud_points: usize,
+    /// Points on `/mirrored`, all frames.
+    pub mirrored_points: usize,
+}
+
+/// Write `run` as an MCAP file at `path` (replaced if it exists; written to
+/// a temporary file and renamed into place). The sequence must carry poses.
+pub fn write_run_mcap(path: &Path, run: &McapRun<'_>) -> Result<McapSummary> {
+    let poses = run.sequence.poses.as_ref().ok_or_else(|| {
+        Error::Input("an MCAP recording needs a pose per frame (--poses FILE)".into())
+    })?;
+    if run.classes.len() != run.sequence.len() || poses.len() != run.sequence.len() {
+        return Err(Error::Input(format!(
+            "{}: {} frames but {} class vectors and {} poses",
+            path.display(),
+            run.sequence.len(),
+            run.classes.len(),
+            poses.len()
+        )));
+    }
+    let tmp = tmp_path(path);
+    let result = write_to(&tmp, run, poses);
+    match result {
+        Ok(summary) => {
+            std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))?;
+            Ok(summary)
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn tmp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".tmp");
+    path.with_file_name(name)
+}
+
+fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<McapSummary> {
+    let fox = |e: foxglove::FoxgloveError| Error::Input(format!("{}: MCAP: {e}", path.display()));
+    let file = File::create(path).map_err(|e| Error::io(path, e))?;
+    let ctx = Context::new();
+    let writer = McapWriter::new()
+        .context(&ctx)
+        .create(BufWriter::new(file))
+        .map_err(fox)?;
+    let cloud = ChannelBuilder::new("/cloud")
+        .context(&ctx)
+        .build::<PointCloud>();
+    let mirrored = ChannelBuilder::new("/mirrored")
+        .context(&ctx)
+        .build::<PointCloud>();
+    let planes = ChannelBuilder::new("/planes")
+        .context(&ctx)
+        .build::<SceneUpdate>();
+    let tf = ChannelBuilder::new("/tf")
+        .context(&ctx)
+        .build::<FrameTransform>();
+    let trajectory = ChannelBuilder::new("/trajectory")
+        .context(&ctx)
+        .build::<PosesInFrame>();
+
+    let scene = scene_update(run.planes);
+    let mut summary = McapSummary::default();
+    let mut path_poses = Vec::with_capacity(poses.len());
+    for (k, frame) in run.sequence.frames.iter().enumerate() {
+        let pose = poses[k];
+        let stamp = Timestamp::saturating_from_epoch_secs_f64(frame.stamp);
+        let t = stamp.total_nanos();
+        let classes = &run.classes[k];
+
+        // Classified cloud, world frame.
+        let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
+        for (pt, class) in frame.points.iter().zip(classes) {
+            push_xyz(&mut data, &(pose * pt.position()));
+            data.push(class.id());
+            data.extend_from_slice(&pt.intensity.to_le_bytes());
+        }
+        summary.cloud_points += frame.points.len();
+        cloud.log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
+
+        // Reflections mirrored back (through the planes seen from this pose).
+        let to_sensor = pose.inverse();
+        let origin = Point3::origin();
+        let local: Vec<BoundedPlane> = run
+            .planes
+            .iter()
+            .map(|bp| bp.transformed(&to_sensor).facing(&origin))
+            .collect();
+        let back = mirror_reflections(frame, classes, &local, run.hull_margin);
+        let mut data = Vec::with_capacity(back.len() * MIRRORED_STRIDE as usize);
+        for (_, q) in &back {
+            push_xyz(&mut data, &(pose * q));
+            data.push(Class::Reflection.id());
+        }
+        summary.mirrored_points += back.len();
+        mirrored.log_with_time(&point_cloud(stamp, data, MIRRORED_STRIDE, false), t);
+
+        // Planes (re-sent every frame so seeking always shows them).
+        let mut update = scene.clone();
+        for e in &mut update.entities {
+            e.timestamp = Some(stamp);
+        }
+        planes.log_with_time(&update, t);
+
+        // Sensor pose and trajectory.
+        tf.log_with_time(
+            &FrameTransform {
+                timestamp: Some(stamp),
+                parent_frame_id: WORLD_FRAME.into(),
+                child_frame_id: SENSOR_FRAME.into(),
+                translation: Some(vector(&pose)),
+                rotation: Some(quaternion(&pose)),
+            },
+            t,
+        );
+        path_poses.push(to_pose(&pose));
+        trajectory.log_with_time(
+            &PosesInFrame {
+                timestamp: Some(stamp),
+                frame_id: WORLD_FRAME.into(),
+                poses: path_poses.clone(),
+            },
+            t,
+        );
+        summary.frames += 1;
+    }
+    writer.close().map_err(fox)?;
+    Ok(summary)
+}
+
+fn push_xyz(buf: &mut Vec<u8>, p: &Point3<f64>) {
+    for c in [p.x as f32, p.y as f32, p.z as f32] {
+        buf.extend_from_slice(&c.to_le_bytes());
+    }
+}
+
+fn field(name: &str, offset: u32, t: NumericType) -> PackedElementField {
+    PackedElementField {
+        name: name.into(),
+        offset,
+        r#type: t as i32,
+    }
+}
+
+fn point_cloud(stamp: Timestamp, data: Vec<u8>, stride: u32, intensity: bool) -> PointCloud {
+    let mut fields = vec![
+        field("x", 0, NumericType::Float32),
+        field("y", 4, NumericType::Float32),
+        field("z", 8, NumericType::Float32),
+        field("class", 12, NumericType::Uint8),
+    ];
+    if intensity {
+        fields.push(field("intensity", 13, NumericType::Float32));
+    }
+    PointCloud {
+        timestamp: Some(stamp),
+        frame_id: WORLD_FRAME.into(),
+        pose: Some(to_pose(&Isometry3::identity())),
+        point_stride: stride,
+        fields,
+        data: bytes::Bytes::from(data),
+    }
+}
+
+fn vector(pose: &Isometry3<f64>) -> Vector3 {
+    let t = pose.translation.vector;
+    Vector3 {
+        x: t.x,
+        y: t.y,
+        z: t.z,
+    }
+}
+
+fn quaternion(pose: &Isometry3<f64>) -> Quaternion {
+    let q = pose.rotation;
+    Quaternion {
+        x: q.i,
+        y: q.j,
+        z: q.k,
+        w: q.w,
+    }
+}
+
+fn to_pose(pose: &Isometry3<f64>) -> Pose {
+    Pose {
+        position: Some(vector(pose)),
+        orientation: Some(quaternion(pose)),
+    }
+}
+
+fn fg_point(p: &Point3<f64>) -> FgPoint3 {
+    FgPoint3 {
+        x: p.x,
+        y: p.y,
+        z: p.z,
+    }
+}
+
+/// The hull (light) and the panes (stronger) of every plane as translucent
+/// triangle fans with outlines, one entity per plane.
+fn scene_update(planes: &[BoundedPlane]) -> SceneUpdate {
+    let hull_colour = Color {
+        r: 0.2,
+        g: 0.6,
+        b: 1.0,
+        a: 0.15,
+    };
+    let pane_colour = Color {
+        r: 0.0,
+        g: 0.8,
+        b: 0.3,
+        a: 0.4,
+    };
+    let entities = planes
+        .iter()
+        .enumerate()
+        .map(|(i, bp)| {
+            let mut polygons = vec![(bp.boundary_3d(), hull_colour)];
+            if let Some(panes) = &bp.panes {
+                for pane in panes.iter() {
+                    let vs = pane.vertices().iter().map(|q| bp.chart.to_3d(q)).collect();
+                    polygons.push((vs, pane_colour));
+                }
+            }
+            let mut entity = SceneEntity {
+                frame_id: WORLD_FRAME.into(),
+                id: format!("plane_{i}"),
+                ..Default::default()
+            };
+            for (vs, colour) in polygons {
+                if vs.len() < 3 {
+                    continue;
+                }
+                entity.triangles.push(fan(&vs, colour));
+                entity.lines.push(LinePrimitive {
+                    r#type: line_primitive::Type::LineLoop as i32,
+                    pose: Some(to_pose(&Isometry3::identity())),
+                    thickness: 2.0,
+                    scale_invariant: true,
+                    points: vs.iter().map(fg_point).collect(),
+                    color: Some(Color { a: 1.0, ..colour }),
+                    ..Default::default()
+                });
+            }
+            entity
+        })
+        .collect();
+    SceneUpdate {
+        deletions: Vec::new(),
+        entities,
+    }
+}
+
+/// A triangle fan over a convex polygon as a triangle list.
+fn fan(vs: &[Point3<f64>], colour: Color) -> TriangleListPrimitive {
+    let points = (1..vs.len() - 1)
+        .flat_map(|j| [&vs[0], &vs[j], &vs[j + 1]])
+        .map(fg_point)
+        .collect();
+    TriangleListPrimitive {
+        pose: Some(to_pose(&Isometry3::identity())),
+        points,
+        color: Some(colour),
+        ..Default::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::{Frame, Point};
+    use crate::geometry::Plane;
+    use nalgebra::{Translation3, UnitQuaternion, Vector3 as V3};
+    use std::collections::BTreeMap;
+
+    fn sequence(frames: usize, points: usize) -> Sequence {
+        let frames: Vec<Frame> = (0..frames)
+            .map(|k| Frame {
+                name: format!("{k}"),
+                stamp: 100.0 + k as f64 * 0.1,
+                points: (0..points)
+                    .map(|i| Point {
+                        xyz: [3.0, i as f32 * 0.01, 0.0],
+                        intensity: 7.0,
+                        ..Default::default()
+                    })
+                    .collect(),
+                has_labels: false,
+            })
+            .collect();
+        let poses = (0..frames.len())
+            .map(|k| {
+                Isometry3::from_parts(
+                    Translation3::new(k as f64, 0.0, 0.0),
+                    UnitQuaternion::from_scaled_axis(V3::new(0.0, 0.0, 0.1 * k as f64)),
+                )
+            })
+            .collect();
+        Sequence::from_frames(frames, Some(poses), "test").unwrap()
+    }
+
+    fn topic_counts(path: &Path) -> BTreeMap<String, usize> {
+        let bytes = std::fs::read(path).unwrap();
+        let mut counts = BTreeMap::new();
+        for m in ::mcap::MessageStream::new(&bytes).unwrap() {
+            *counts.entry(m.unwrap().channel.topic.clone()).or_default() += 1;
+        }
+        counts
+    }
+
+    /// Two recordings written at the same time do not mix messages: each
+    /// has a private context.
+    #[test]
+    fn concurrent_recordings_stay_separate() {
+        let dir = tempfile::tempdir().unwrap();
+        let plane = Plane::new(V3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        let bp =
+            BoundedPlane::from_points(plane, square.iter().map(|&(y, z)| Point3::new(5.0, y, z)));
+        let runs = [(2usize, 10usize), (5, 3)];
+        std::thread::scope(|s| {
+            for (i, &(n, p)) in runs.iter().enumerate() {
+                let path = dir.path().join(format!("{i}.mcap"));
+                let bp = bp.clone();
+                s.spawn(move || {
+                    let seq = sequence(n, p);
+                    let classes = vec![vec![Class::Normal; p]; n];
+                    let planes = [bp];
+                    let summary = write_run_mcap(
+                        &path,
+                        &McapRun {
+                            sequence: &seq,
+                            classes: &classes,
+                            planes: &planes,
+                            hull_margin: 0.0,
+                        },
+                    )
+                    .unwrap();
+                    assert_eq!(summary.frames, n);
+                    assert_eq!(summary.cloud_points, n * p);
+                });
+            }
+        });
+        for (i, &(n, _)) in runs.iter().enumerate() {
+            let counts = topic_counts(&dir.path().join(format!("{i}.mcap")));
+            assert_eq!(counts.len(), 5, "{counts:?}");
+            assert!(counts.values().all(|&c| c == n), "{counts:?}");
+        }
+        // Rewriting replaces the file.
+        let seq = sequence(1, 1);
+        let path = dir.path().join("0.mcap");
+        let classes = vec![vec![Class::Glass]];
+        write_run_mcap(
+            &path,
+            &McapRun {
+                sequence: &seq,
+                classes: &classes,
+                planes: &[],
+                hull_margin: 0.0,
+            },
+        )
+        .unwrap();
+        assert!(topic_counts(&path).values().all(|&c| c == 1));
+    }
+
+    #[test]
+    fn mismatched_classes_are_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let seq = sequence(2, 2);
+        let err = write_run_mcap(
+            &dir.path().join("x.mcap"),
+            &McapRun {
+                sequence: &seq,
+                classes: &[],
+                planes: &[],
+                hull_margin: 0.0,
+            },
+        );
+        assert!(err.is_err());
+        assert!(!dir.path().join("x.mcap").exists());
+    }
+}

@@ -1,0 +1,365 @@
+//! PNG plots drawn with `plotters` (bitmap backend, embedded DejaVu Sans font,
+//! no system font libraries): a top-down map, the trajectories and the
+//! per-class scores.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+
+use crate::classify::Class;
+use crate::eval::Metrics;
+use crate::io::map_ply::class_colour;
+use crate::io::MapPoint;
+use crate::reflect::BoundedPlane;
+use crate::{Error, Result};
+
+/// DejaVu Sans (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+/// Most points drawn in the top-down view (a regular subsample beyond).
+const MAX_DRAWN_POINTS: usize = 200_000;
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The font is embedded and known to be valid; a failure only means
+        // labels are not drawn.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// Draw into a temporary `*.tmp.png` next to `path` and rename it into place.
+fn render(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()>,
+) -> Result<()> {
+    register_font();
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let tmp: PathBuf = path.with_file_name(format!("{stem}.tmp.png"));
+    let result = (|| {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+        draw(&root)?;
+        root.present().map_err(|e| plot_err(path, e))
+    })();
+    match result {
+        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Input(format!("{}: cannot draw the plot: {e}", path.display()))
+}
+
+/// Ranges covering `points` with a margin (at least `min_span` metres),
+/// stretched so one metre has the same length on both axes of a `w`×`h` plot
+/// area.
+fn equal_ranges(
+    points: impl Iterator<Item = [f64; 2]>,
+    min_span: f64,
+    w: f64,
+    h: f64,
+) -> (std::ops::Range<f64>, std::ops::Range<f64>) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points.filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        for a in 0..2 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    if !(lo[0] <= hi[0]) {
+        return (-1.0..1.0, -1.0..1.0);
+    }
+    let (cx, cy) = ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0);
+    let mut sx = (hi[0] - lo[0]).max(min_span) * 1.1;
+    let mut sy = (hi[1] - lo[1]).max(min_span) * 1.1;
+    if sx / sy < w / h {
+        sx = sy * w / h;
+    } else {
+        sy = sx * h / w;
+    }
+    (cx - sx / 2.0..cx + sx / 2.0, cy - sy / 2.0..cy + sy / 2.0)
+}
+
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+/// The reflective extent of each plane as closed polylines (x, y): each
+/// pane, then the hull (drawn on top).
+fn plane_outlines(planes: &[BoundedPlane]) -> Vec<(bool, Vec<(f64, f64)>)> {
+    let mut out = Vec::new();
+    for bp in planes {
+        let mut ring = |vs: Vec<nalgebra::Point3<f64>>, pane: bool| {
+            if let Some(first) = vs.first().copied() {
+                let mut line: Vec<(f64, f64)> = vs.iter().map(|p| (p.x, p.y)).collect();
+                line.push((first.x, first.y));
+                out.push((pane, line));
+            }
+        };
+        if let Some(panes) = &bp.panes {
+            for pane in panes.iter() {
+                ring(
+                    pane.vertices().iter().map(|q| bp.chart.to_3d(q)).collect(),
+                    true,
+                );
+            }
+        }
+        ring(bp.boundary_3d(), false);
+    }
+    out
+}
+
+/// `topdown.png`: the classified map seen from above (points coloured by
+/// class), the reflective planes' hulls (purple) and panes (cyan) and the
+/// trajectory (black).
+pub fn topdown_png(
+    path: &Path,
+    points: &[MapPoint],
+    planes: &[BoundedPlane],
+    trajectory: &[[f64; 2]],
+) -> Result<()> {
+    let (w, h) = (1400u32, 1100u32);
+    let xy = |p: &MapPoint| [f64::from(p.xyz[0]), f64::from(p.xyz[1])];
+    let (xr, yr) = equal_ranges(
+        points.iter().map(xy).chain(trajectory.iter().copied()),
+        1.0,
+        f64::from(w - 90),
+        f64::from(h - 110),
+    );
+    render(path, (w, h), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption("Classified map, top-down (world frame)", ("sans-serif", 28))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d(xr, yr)
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .label_style(("sans-serif", 16))
+            .axis_desc_style(("sans-serif", 18))
+            .light_line_style(WHITE.mix(0.0))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        let step = points.len().div_ceil(MAX_DRAWN_POINTS).max(1);
+        for (class, name) in [
+            (Class::Normal, "normal"),
+            (Class::Obstacle, "obstacle behind glass"),
+            (Class::Reflection, "reflection (measured)"),
+            (Class::Glass, "reflective surface"),
+        ] {
+            let colour = rgb(class_colour(class, false));
+            let drawn = points
+                .iter()
+                .step_by(step)
+                .filter(|p| p.class == class)
+                .map(|p| Circle::new((xy(p)[0], xy(p)[1]), 1, colour.filled()));
+            chart
+                .draw_series(drawn)
+                .map_err(|e| plot_err(path, e))?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
+        }
+        let mut labelled = [false; 2];
+        for (pane, line) in plane_outlines(planes) {
+            let colour = if pane {
+                RGBColor(0, 190, 210)
+            } else {
+                RGBColor(170, 0, 200)
+            };
+            let width = if pane { 5 } else { 2 };
+            let series = chart
+                .draw_series(LineSeries::new(line, colour.stroke_width(width)))
+                .map_err(|e| plot_err(path, e))?;
+            if !labelled[pane as usize] {
+                labelled[pane as usize] = true;
+                series
+                    .label(if pane {
+                        "reflective pane"
+                    } else {
+                        "reflective plane hull"
+                    })
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(3))
+                    });
+            }
+        }
+        if !trajectory.is_empty() {
+            chart
+                .draw_series(LineSeries::new(
+                    trajectory.iter().map(|p| (p[0], p[1])),
+                    BLACK.stroke_width(2),
+                ))
+                .map_err(|e| plot_err(path, e))?
+                .label("trajectory")
+                .legend(|(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| plot_err(path, e))
+    })
+}
+
+/// `trajectory.png`: named trajectories (x, y, world frame), e.g. estimated
+/// and true; dots mark the poses, a large dot each start.
+pub fn trajectory_png(path: &Path, series: &[(&str, Vec<[f64; 2]>)]) -> Result<()> {
+    let (w, h) = (1000u32, 800u32);
+    let (xr, yr) = equal_ranges(
+        series.iter().flat_map(|(_, s)| s.iter().copied()),
+        0.1,
+        f64::from(w - 90),
+        f64::from(h - 110),
+    );
+    let palette = [BLACK, RGBColor(220, 30, 30), RGBColor(30, 90, 255)];
+    render(path, (w, h), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption("Trajectory (world frame, top-down)", ("sans-serif", 26))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d(xr, yr)
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("x [m]")
+            .y_desc("y [m]")
+            .label_style(("sans-serif", 16))
+            .axis_desc_style(("sans-serif", 18))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (i, (name, s)) in series.iter().enumerate() {
+            let colour = palette[i % palette.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    s.iter().map(|p| (p[0], p[1])),
+                    colour.stroke_width(2),
+                ))
+                .map_err(|e| plot_err(path, e))?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(
+                    s.iter()
+                        .map(|p| Circle::new((p[0], p[1]), 2, colour.filled())),
+                )
+                .map_err(|e| plot_err(path, e))?;
+            chart
+                .draw_series(
+                    s.first()
+                        .map(|p| Circle::new((p[0], p[1]), 6, colour.filled())),
+                )
+                .map_err(|e| plot_err(path, e))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(|e| plot_err(path, e))
+    })
+}
+
+/// `metrics.png`: precision, recall and IoU (%) of every scored class as
+/// grouped bars.
+pub fn metrics_png(path: &Path, metrics: &Metrics) -> Result<()> {
+    let classes = &metrics.classes;
+    let n = classes.len() as f64;
+    let names: Vec<String> = classes.iter().map(|c| c.class.name().to_string()).collect();
+    let bars = [
+        ("precision", RGBColor(30, 90, 255)),
+        ("recall", RGBColor(240, 140, 0)),
+        ("IoU", RGBColor(0, 160, 70)),
+    ];
+    render(path, (1000, 650), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "Per-class scores (accuracy {:.1} %, mIoU {:.1} %)",
+                    metrics.accuracy, metrics.miou
+                ),
+                ("sans-serif", 26),
+            )
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(55)
+            .build_cartesian_2d(-0.5..n - 0.5, 0.0..130.0)
+            .map_err(|e| plot_err(path, e))?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(2 * classes.len() + 1)
+            .x_label_formatter(&|x| {
+                let i = x.round();
+                if (x - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < names.len() {
+                    names[i as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .x_label_style(("sans-serif", 20))
+            .y_desc("%")
+            // Room above 100 % is for the legend: no ticks there.
+            .y_label_formatter(&|y| {
+                if *y <= 100.0 {
+                    format!("{y:.0}")
+                } else {
+                    String::new()
+                }
+            })
+            .y_label_style(("sans-serif", 16))
+            .axis_desc_style(("sans-serif", 18))
+            .draw()
+            .map_err(|e| plot_err(path, e))?;
+        for (b, (name, colour)) in bars.iter().enumerate() {
+            let colour = *colour;
+            let rects = classes.iter().enumerate().map(|(i, c)| {
+                let v = [c.precision, c.recall, c.iou][b];
+                let v = if v.is_finite() { v } else { 0.0 };
+                let x0 = i as f64 - 0.375 + b as f64 * 0.25;
+                Rectangle::new([(x0, 0.0), (x0 + 0.23, v)], colour.filled())
+            });
+            chart
+                .draw_series(rects)
+                .map_err(|e| plot_err(path, e))?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 14, y + 6)], colour.filled())
+                });
+            let values = classes.iter().enumerate().map(|(i, c)| {
+                let v = [c.precision, c.recall, c.iou][b];
+                let v = if v.is_finite() { v } else { 0.0 };
+                let x0 = i as f64 - 0.375 + b as f64 * 0.25;
+                Text::new(format!("{v:.0}"), (x0 + 0.03, v + 5.0), ("sans-serif", 15))
+            });
+            chart.draw_series(values).map_err(|e| plot_err(path, e))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 18))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| plot_err(path, e))
+    })
+}
