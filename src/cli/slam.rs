@@ -143,7 +143,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "degenerate_frames": degenerate,
         "fallback_frames": fallback,
         "landmarks": slam.map.landmarks.len(),
-        "frames_per_second": fps,
+        "frames_per_cpu_second": fps,
         "trajectory": trajectory,
         "classification": classification,
         "classification_true_poses": reference,
@@ -154,13 +154,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
     })?;
 
     println!(
-        "{} frames: {} landmarks, {} degenerate frames, {} on the motion model alone; {:.1} frames/s (front end + tracking, {} threads)",
+        "{} frames: {} landmarks, {} degenerate frames, {} on the motion model alone; {:.1} frames per CPU-second (front end + tracking)",
         slam.reports.len(),
         slam.map.landmarks.len(),
         degenerate,
         fallback,
-        fps,
-        rayon::current_num_threads()
+        fps
     );
     println!(
         "poses.txt, planes.json, frames.csv, metrics.json in {}",
