@@ -106,18 +106,8 @@ pub fn closed_form(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Plane;
 
-    fn pair(n: Vector3<f64>, d: f64, t: &Isometry3<f64>) -> Correspondence {
-        let source = Plane::new(n, d).unwrap();
-        Correspondence {
-            source,
-            target: source.transformed(t),
-            ground: false,
-            source_index: 0,
-            target_index: 0,
-        }
-    }
+    use crate::registration::test_pair as pair;
 
     #[test]
     fn coplanar_normals_give_a_rotation_not_a_reflection() {

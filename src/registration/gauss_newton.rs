@@ -196,19 +196,9 @@ fn refine_at(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Plane;
     use nalgebra::Vector3;
 
-    fn pair(n: Vector3<f64>, d: f64, t: &Isometry3<f64>) -> Correspondence {
-        let source = Plane::new(n, d).unwrap();
-        Correspondence {
-            source,
-            target: source.transformed(t),
-            ground: false,
-            source_index: 0,
-            target_index: 0,
-        }
-    }
+    use crate::registration::test_pair as pair;
 
     #[test]
     fn converges_from_a_perturbed_start() {

@@ -110,3 +110,21 @@ pub fn register(
         refinement,
     })
 }
+
+/// Test helper: the correspondence of a plane `(n, d)` with its image under
+/// `t` (shared by the registration tests).
+#[cfg(test)]
+pub(crate) fn test_pair(
+    n: nalgebra::Vector3<f64>,
+    d: f64,
+    t: &nalgebra::Isometry3<f64>,
+) -> Correspondence {
+    let source = crate::geometry::Plane::new(n, d).expect("valid test plane");
+    Correspondence {
+        source,
+        target: source.transformed(t),
+        ground: false,
+        source_index: 0,
+        target_index: 0,
+    }
+}
