@@ -10,7 +10,7 @@ use super::normals::{NormalParams, OrganizedNormals};
 use super::region_growing::{grow_regions, RegionParams};
 use super::{FramePlane, PlaneExtractor};
 use crate::cloud::Frame;
-use crate::geometry::fit::{ransac_plane, RansacParams};
+use crate::geometry::fit::{ransac_plane, remove_positions, RansacParams};
 use crate::io::PlaneKind;
 use crate::reflect::Detection;
 use crate::rng::SplitMix64;
@@ -180,15 +180,7 @@ impl RegionGrowingExtractor {
                 }
                 planes.push(fp);
                 ordinary += 1;
-                let mut is_inlier = vec![false; remaining.len()];
-                for &k in &fit.inliers {
-                    is_inlier[k as usize] = true;
-                }
-                let mut k = 0;
-                remaining.retain(|_| {
-                    k += 1;
-                    !is_inlier[k - 1]
-                });
+                remove_positions(&mut remaining, &fit.inliers);
             }
         }
         planes

@@ -140,6 +140,23 @@ fn count_inliers(points: &[Point3<f64>], plane: &Plane, distance: f64) -> usize 
         .count()
 }
 
+/// Remove from `items` the entries at `positions` (indices into `items`, as
+/// the inliers of a fit on `items`), keeping the order of the rest: the
+/// "remove the inliers, fit again" step of multi-plane RANSAC.
+pub fn remove_positions<T>(items: &mut Vec<T>, positions: &[u32]) {
+    let mut drop = vec![false; items.len()];
+    for &k in positions {
+        if let Some(d) = drop.get_mut(k as usize) {
+            *d = true;
+        }
+    }
+    let mut k = 0;
+    items.retain(|_| {
+        k += 1;
+        !drop[k - 1]
+    });
+}
+
 /// Indices of the points within `distance` of `plane`.
 pub fn select_inliers(points: &[Point3<f64>], plane: &Plane, distance: f64) -> Vec<u32> {
     points

@@ -9,7 +9,7 @@ use super::intensity_peak::{intensity_peak_candidates, IntensityPeakParams};
 use super::{BoundedPlane, Detection, ReflectiveDetector, ReflectivePlane};
 use crate::cloud::Frame;
 use crate::geometry::cluster::euclidean_clusters;
-use crate::geometry::fit::{ransac_plane, RansacParams};
+use crate::geometry::fit::{ransac_plane, remove_positions, RansacParams};
 use crate::geometry::{Plane, PlaneChart};
 use crate::rng::SplitMix64;
 use crate::sensor::{OrganizedScan, SensorModel};
@@ -135,15 +135,7 @@ impl CandidateRansacDetector {
                     out.push(ReflectivePlane { bounded, inliers });
                 }
             }
-            let mut is_inlier = vec![false; remaining.len()];
-            for &k in &fit.inliers {
-                is_inlier[k as usize] = true;
-            }
-            let mut k = 0;
-            remaining.retain(|_| {
-                k += 1;
-                !is_inlier[k - 1]
-            });
+            remove_positions(&mut remaining, &fit.inliers);
         }
     }
 }
