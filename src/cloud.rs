@@ -56,3 +56,16 @@ impl Frame {
         self.points.iter().filter(|p| p.ret == 2).count()
     }
 }
+
+/// Test helper: a labelled-normal point of intensity 10 (shared by the unit
+/// tests that build small frames by hand).
+#[cfg(test)]
+pub(crate) fn test_point(x: f32, y: f32, z: f32, ring: u16, ret: u8) -> Point {
+    Point {
+        xyz: [x, y, z],
+        intensity: 10.0,
+        ring,
+        ret,
+        label: 1,
+    }
+}

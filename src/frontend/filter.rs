@@ -185,21 +185,12 @@ impl CellCloud {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::Point;
     use crate::geometry::Plane;
     use crate::reflect::{BoundedPlane, ReflectivePlane};
     use crate::sensor::SensorModel;
     use nalgebra::Vector3;
 
-    fn point(x: f32, y: f32, z: f32, ring: u16, ret: u8) -> Point {
-        Point {
-            xyz: [x, y, z],
-            intensity: 10.0,
-            ring,
-            ret,
-            label: 1,
-        }
-    }
+    use crate::cloud::test_point as point;
 
     #[test]
     fn candidates_and_points_behind_a_detected_pane_are_removed() {

@@ -11,6 +11,7 @@
 
 pub mod chart;
 pub mod cluster;
+pub mod fastmath;
 pub mod fit;
 pub mod grid;
 pub mod plane;

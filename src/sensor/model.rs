@@ -120,8 +120,8 @@ impl SensorModel {
     /// wrapped to `0..columns` (the seam is one column, never two).
     #[inline]
     pub fn column_of(&self, x: f64, y: f64) -> usize {
-        let deg = 180.0 + crate::geometry::voxel::fast_atan2(y, x).to_degrees();
-        let c = crate::geometry::voxel::round_i64(deg / self.column_step_deg());
+        let deg = 180.0 + crate::geometry::fastmath::fast_atan2(y, x).to_degrees();
+        let c = crate::geometry::fastmath::round_i64(deg / self.column_step_deg());
         c.rem_euclid(self.columns as i64) as usize
     }
 

@@ -154,17 +154,8 @@ impl OrganizedScan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cloud::Point;
 
-    fn point(x: f32, y: f32, z: f32, ring: u16, ret: u8) -> Point {
-        Point {
-            xyz: [x, y, z],
-            intensity: 10.0,
-            ring,
-            ret,
-            label: 1,
-        }
-    }
+    use crate::cloud::test_point as point;
 
     #[test]
     fn pairs_returns_by_ring_and_column_across_the_seam() {
