@@ -91,13 +91,15 @@ impl EvidenceGrid {
     /// Flat index of the cell holding `uv`, if inside the grid.
     #[inline]
     pub fn index(&self, uv: &Point2<f64>) -> Option<usize> {
-        let i = ((uv.x - self.min.x) / self.cell).floor();
-        let j = ((uv.y - self.min.y) / self.cell).floor();
-        if i >= 0.0 && j >= 0.0 && (i as usize) < self.cols && (j as usize) < self.rows {
-            Some(j as usize * self.cols + i as usize)
-        } else {
-            None
+        let x = (uv.x - self.min.x) / self.cell;
+        let y = (uv.y - self.min.y) / self.cell;
+        // Non-negative (NaN fails), so truncation is the floor (no libm
+        // call in the per-point loops); `as` saturates huge values.
+        if !(x >= 0.0 && y >= 0.0) {
+            return None;
         }
+        let (i, j) = (x as usize, y as usize);
+        (i < self.cols && j < self.rows).then(|| j * self.cols + i)
     }
 
     /// Centre of a cell in chart coordinates.

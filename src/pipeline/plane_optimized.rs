@@ -232,8 +232,9 @@ fn sequence_support<'a>(
         })
         .collect();
     let params = classifier.params();
+    // Flattened into one vector so the builder knows the count up front.
     WorldSupport::build(
-        per_frame.into_iter().flatten(),
+        per_frame.concat(),
         params.support_voxel,
         params.decision.support_radius,
     )
