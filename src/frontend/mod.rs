@@ -36,7 +36,7 @@ pub use normals::{NormalParams, OrganizedNormals};
 pub use reflective::reflective_planes;
 pub use region_growing::RegionParams;
 
-use nalgebra::{Isometry3, Point2, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix3, Point2, Point3, Vector3};
 
 use crate::cloud::Frame;
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
@@ -63,6 +63,31 @@ pub struct FramePlane {
     pub area: f64,
     /// Indices of the inliers in the frame's points.
     pub inliers: Vec<u32>,
+    /// Centred scatter of the inliers, `Σ (p - c)(p - c)ᵀ` about the
+    /// centroid: with the count and centroid it summarises every
+    /// point-to-plane residual of the observation (the back-end's
+    /// point-to-plane factor).
+    pub scatter: Matrix3<f64>,
+}
+
+/// Centroid and centred scatter of `inliers` of `frame` (the origin and zero
+/// for no inliers).
+pub fn inlier_moments(frame: &Frame, inliers: &[u32]) -> (Point3<f64>, Matrix3<f64>) {
+    if inliers.is_empty() {
+        return (Point3::origin(), Matrix3::zeros());
+    }
+    let n = inliers.len() as f64;
+    let sum: Vector3<f64> = inliers
+        .iter()
+        .map(|&i| frame.points[i as usize].position().coords)
+        .sum();
+    let c = sum / n;
+    let mut scatter = Matrix3::zeros();
+    for &i in inliers {
+        let r = frame.points[i as usize].position().coords - c;
+        scatter += r * r.transpose();
+    }
+    (Point3::from(c), scatter)
 }
 
 impl FramePlane {
@@ -76,27 +101,24 @@ impl FramePlane {
     ) -> Option<Self> {
         let plane = plane.facing(&Point3::origin());
         let chart = PlaneChart::of(&plane);
-        let mut sum = Vector3::zeros();
         let uv: Vec<_> = inliers
             .iter()
-            .map(|&i| {
-                let p = frame.points[i as usize].position();
-                sum += p.coords;
-                chart.to_2d(&p)
-            })
+            .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
             .collect();
         let hull = hull_of(uv);
         if hull.is_empty() {
             return None;
         }
+        let (centroid, scatter) = inlier_moments(frame, &inliers);
         Some(Self {
             kind,
             plane,
             chart,
             area: hull.area(),
             hull,
-            centroid: Point3::from(sum / inliers.len() as f64),
+            centroid,
             inliers,
+            scatter,
         })
     }
 
@@ -111,6 +133,10 @@ impl FramePlane {
             centroid: t * self.centroid,
             area: self.area,
             inliers: self.inliers.clone(),
+            scatter: {
+                let r = t.rotation.to_rotation_matrix().into_inner();
+                r * self.scatter * r.transpose()
+            },
         }
     }
 

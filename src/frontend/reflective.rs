@@ -15,12 +15,12 @@
 //! takes the detector's planes as they are (the paper).
 
 use super::extractor::ExtractorParams;
-use super::FramePlane;
+use super::{inlier_moments, FramePlane};
 use crate::cloud::Frame;
 use crate::geometry::fit::fit_plane;
 use crate::io::PlaneKind;
 use crate::reflect::{Detection, ReflectivePlane};
-use nalgebra::{Point2, Point3, Vector3};
+use nalgebra::Point2;
 
 /// The detector's planes as frame planes of kind `Reflective` (see the
 /// module documentation); `params` gives the link distance of a patch and
@@ -129,19 +129,16 @@ fn as_detected(frame: &Frame, rp: &ReflectivePlane) -> Option<FramePlane> {
     if rp.bounded.boundary.is_empty() || rp.inliers.is_empty() {
         return None;
     }
-    let sum: Vector3<f64> = rp
-        .inliers
-        .iter()
-        .map(|&i| frame.points[i as usize].position().coords)
-        .sum();
+    let (centroid, scatter) = inlier_moments(frame, &rp.inliers);
     Some(FramePlane {
         kind: PlaneKind::Reflective,
         plane: rp.bounded.plane,
         chart: rp.bounded.chart,
         hull: rp.bounded.boundary.clone(),
-        centroid: Point3::from(sum / rp.inliers.len() as f64),
+        centroid,
         area: rp.bounded.boundary.area(),
         inliers: rp.inliers.clone(),
+        scatter,
     })
 }
 

@@ -23,9 +23,11 @@
 //! estimated poses) is [`crate::pipeline::slam`].
 
 pub mod association;
+pub mod log;
 pub mod motion;
 pub mod tracker;
 
 pub use association::{associate, MapMatchParams};
+pub use log::{LandmarkObservation, TrackedFrame, TrackingLog};
 pub use motion::{MotionModel, MotionModelName, MotionParams};
 pub use tracker::{FrameReport, SlamParams, Tracker};

@@ -5,6 +5,7 @@ use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
+use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
 use super::motion::{MotionModel, MotionParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
@@ -116,6 +117,7 @@ pub struct Tracker {
     previous: Option<(Vec<FramePlane>, Isometry3<f64>)>,
     frames: usize,
     origin: Isometry3<f64>,
+    log: TrackingLog,
 }
 
 impl Tracker {
@@ -136,6 +138,7 @@ impl Tracker {
             previous: None,
             frames: 0,
             origin,
+            log: TrackingLog::default(),
         }
     }
 
@@ -147,6 +150,16 @@ impl Tracker {
     /// The final map.
     pub fn into_map(self) -> PlaneMap {
         self.map
+    }
+
+    /// The observations and odometry logged so far (for a back-end).
+    pub fn log(&self) -> &TrackingLog {
+        &self.log
+    }
+
+    /// The final map and the log.
+    pub fn into_parts(self) -> (PlaneMap, TrackingLog) {
+        (self.map, self.log)
     }
 
     /// Track one frame given its planes (sensor frame); `seed` makes the
@@ -178,6 +191,7 @@ impl Tracker {
 
         // 1. Predict (the first frame defines the world frame).
         let mut matched: Vec<Option<usize>> = vec![None; usable.len()];
+        let mut odometry = None;
         let pose = match (self.motion.predict(), &self.previous) {
             (Some(predicted), Some((prev_planes, prev_pose))) => {
                 // 2. Frame-to-frame registration: the initial global pose.
@@ -196,6 +210,7 @@ impl Tracker {
                         seed,
                     ) {
                         report.frame_inliers = reg.inliers.len();
+                        odometry = Some(reg.pose);
                         initial = prev_pose * reg.pose;
                     }
                 }
@@ -235,17 +250,21 @@ impl Tracker {
         //    go through the merger's own matching (or become landmarks).
         for (fp, m) in usable.iter().zip(&matched) {
             let obs = fp.observation(&pose, index);
-            match m {
+            let k = match m {
                 Some(j) => self.merger.fuse(&mut self.map, *j, &obs),
                 None => self.merger.merge(&mut self.map, &obs),
             };
+            self.log_observation(index, k, fp);
         }
         if !p.use_reflective {
             for fp in planes.iter().filter(|fp| fp.kind == PlaneKind::Reflective) {
-                self.merger
+                let k = self
+                    .merger
                     .merge(&mut self.map, &fp.observation(&pose, index));
+                self.log_observation(index, k, fp);
             }
         }
+        self.log.frames.push(TrackedFrame { pose, odometry });
         report.pruned = self
             .map
             .prune(index, p.prune_after, p.prune_min_observations);
@@ -255,5 +274,15 @@ impl Tracker {
         self.previous = Some((usable, pose));
         report.pose = pose;
         report
+    }
+
+    /// Log that `plane` of frame `frame` was fused into the landmark at
+    /// index `k` of the map.
+    fn log_observation(&mut self, frame: usize, k: usize, plane: &FramePlane) {
+        if let Some(l) = self.map.landmarks.get(k) {
+            self.log
+                .observations
+                .push(LandmarkObservation::new(frame, l.id, plane));
+        }
     }
 }

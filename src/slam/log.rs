@@ -1,0 +1,66 @@
+//! What tracking hands to the back-end: the frames' poses and odometry, and
+//! every plane observation with the landmark it was fused into.
+//!
+//! The tracker's map keeps only the fused landmark; a joint optimisation
+//! needs the individual measurements (GTSAM's factor graph is built from
+//! them), so the tracker logs them as it goes.
+
+use nalgebra::{Isometry3, Matrix3, Point3};
+
+use crate::frontend::FramePlane;
+use crate::geometry::Plane;
+use crate::io::PlaneKind;
+
+/// One tracked frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackedFrame {
+    /// The tracked pose `T_world_sensor`.
+    pub pose: Isometry3<f64>,
+    /// The frame-to-frame registration `T_previous_current`, when it
+    /// succeeded (a relative-pose measurement independent of the map).
+    pub odometry: Option<Isometry3<f64>>,
+}
+
+/// One plane of one frame, associated with a landmark.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LandmarkObservation {
+    /// Index of the frame in the sequence.
+    pub frame: usize,
+    /// Id of the landmark ([`crate::map::Landmark::id`]).
+    pub landmark: usize,
+    /// Kind of the plane.
+    pub kind: PlaneKind,
+    /// The measured plane in the sensor frame (facing the sensor).
+    pub plane: Plane,
+    /// Number of inlier points.
+    pub count: usize,
+    /// Mean of the inliers (sensor frame).
+    pub centroid: Point3<f64>,
+    /// Centred scatter of the inliers (sensor frame).
+    pub scatter: Matrix3<f64>,
+}
+
+impl LandmarkObservation {
+    /// The observation of `plane` (sensor frame) of frame `frame` fused into
+    /// landmark `landmark`.
+    pub fn new(frame: usize, landmark: usize, plane: &FramePlane) -> Self {
+        Self {
+            frame,
+            landmark,
+            kind: plane.kind,
+            plane: plane.plane,
+            count: plane.inliers.len(),
+            centroid: plane.centroid,
+            scatter: plane.scatter,
+        }
+    }
+}
+
+/// The log of a tracking run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TrackingLog {
+    /// One entry per tracked frame, in order.
+    pub frames: Vec<TrackedFrame>,
+    /// Every plane observation, in frame order.
+    pub observations: Vec<LandmarkObservation>,
+}
