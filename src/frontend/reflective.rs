@@ -148,7 +148,7 @@ mod tests {
     use crate::frontend::testing::{cast, Rect};
     use crate::geometry::Plane;
     use crate::reflect::{BoundedPlane, ReflectivePlane};
-    use nalgebra::Vector3;
+    use nalgebra::{Point3, Vector3};
 
     #[test]
     fn touching_cells_form_one_patch() {
