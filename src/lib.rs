@@ -17,6 +17,7 @@
 //! | [`io`] | 3DRef PLY frames, TUM poses, prediction labels, frame/pose matching |
 //! | [`reflect`] | reflective-plane detection in one scan (`ReflectiveDetector`) |
 //! | [`frontend`] | ordinary and ground planes of one scan (`PlaneExtractor`) |
+//! | [`backend`] | sparse pose-plane factor graph: Gauss–Newton / Levenberg–Marquardt on faer, the paper's average |
 //! | [`registration`] | plane matching, mismatch rejection (`MismatchRejector`), closed form and Gauss–Newton |
 //! | [`slam`] | scan-to-map tracking, degeneracy handling, map update |
 //! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
@@ -34,6 +35,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 #![warn(missing_docs)]
 
+pub mod backend;
 pub mod classify;
 pub mod cloud;
 pub mod config;

@@ -170,6 +170,64 @@ pub fn adjoint(t: &Isometry3<f64>) -> Matrix6<f64> {
     ad
 }
 
+/// `Q(ρ, φ)`, the upper-right block of the SE(3) left Jacobian (Barfoot,
+/// *State Estimation for Robotics*, eq. 7.86), stable near `θ = 0`.
+fn se3_q(rho: &Vector3<f64>, phi: &Vector3<f64>) -> Matrix3<f64> {
+    let theta = phi.norm();
+    let t2 = theta * theta;
+    let (c2, c3) = if theta < SMALL_ANGLE {
+        (
+            1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40320.0,
+            1.0 / 120.0 - t2 / 2520.0 + t2 * t2 / 120960.0,
+        )
+    } else {
+        let (s, c) = theta.sin_cos();
+        (
+            (t2 + 2.0 * c - 2.0) / (2.0 * t2 * t2),
+            (2.0 * theta - 3.0 * s + theta * c) / (2.0 * t2 * t2 * theta),
+        )
+    };
+    let c1 = t_minus_sin_over_t3(theta);
+    let p = hat(phi);
+    let r = hat(rho);
+    let pr = p * r;
+    let rp = r * p;
+    let prp = pr * p;
+    r * 0.5 + (pr + rp + prp) * c1 + (p * pr + rp * p - prp * 3.0) * c2 + (prp * p + p * prp) * c3
+}
+
+/// Left Jacobian of SE(3) for `ξ = (ρ, φ)`: `[[J_l(φ), Q(ρ, φ)], [0, J_l(φ)]]`,
+/// so that `exp(ξ + δ) ≈ exp(J_l(ξ) δ) · exp(ξ)`.
+pub fn se3_left_jacobian(xi: &Vector6<f64>) -> Matrix6<f64> {
+    let rho = xi.fixed_rows::<3>(0).into_owned();
+    let phi = xi.fixed_rows::<3>(3).into_owned();
+    let j = so3_left_jacobian(&phi);
+    let mut out = Matrix6::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&j);
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&j);
+    out.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&se3_q(&rho, &phi));
+    out
+}
+
+/// Inverse of the right Jacobian of SE(3), `J_r⁻¹(ξ) = J_l⁻¹(-ξ)`, in closed
+/// form: `[[A⁻¹, -A⁻¹ Q A⁻¹], [0, A⁻¹]]` with `A = J_l(-φ)`, `Q = Q(-ρ, -φ)`.
+///
+/// The back-end needs it for the Jacobian of `log(Z⁻¹ X)` under the right
+/// perturbation `X · exp(δ)`: `∂ log / ∂δ = J_r⁻¹(log(Z⁻¹ X))`.
+pub fn se3_right_jacobian_inv(xi: &Vector6<f64>) -> Matrix6<f64> {
+    let rho = -xi.fixed_rows::<3>(0).into_owned();
+    let phi = -xi.fixed_rows::<3>(3).into_owned();
+    let a_inv = so3_left_jacobian_inv(&phi);
+    let q = se3_q(&rho, &phi);
+    let mut out = Matrix6::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&a_inv);
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&a_inv);
+    out.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(-(a_inv * q * a_inv)));
+    out
+}
+
 /// Right-perturbation update `T · exp(δ)` used by Gauss-Newton on poses.
 pub fn retract(t: &Isometry3<f64>, delta: &Vector6<f64>) -> Isometry3<f64> {
     t * exp(delta)
