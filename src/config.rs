@@ -11,6 +11,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::backend::BackendParams;
 use crate::classify::single_scan::SingleScanParams;
 use crate::classify::PlaneMapParams;
 use crate::frontend::ExtractorParams;
@@ -148,6 +149,9 @@ pub struct Config {
     pub extractor: ExtractorParams,
     /// Reflection SLAM: registration, tracking, map maintenance.
     pub slam: SlamParams,
+    /// Reflection SLAM's back-end: the pose-plane graph optimisation run
+    /// after tracking.
+    pub backend: BackendParams,
     /// Output settings.
     pub output: OutputParams,
 }
@@ -165,6 +169,7 @@ impl Default for Config {
             plane_map: PlaneMapParams::default(),
             extractor: ExtractorParams::default(),
             slam: SlamParams::default(),
+            backend: BackendParams::default(),
             output: OutputParams::default(),
         }
     }
@@ -312,6 +317,7 @@ impl Config {
         if !(self.output.map_voxel >= 0.0) {
             return Err("output.map_voxel must be >= 0".into());
         }
+        self.backend.validate().map_err(|e| e.to_string())?;
         Ok(())
     }
 }

@@ -28,6 +28,19 @@ fn office_trajectory_is_accurate() {
     eprintln!("office, 40 frames: {}", e.summary());
     assert!(e.ate_rmse < 0.02, "{}", e.summary());
     assert!(e.final_error < 0.05, "{}", e.summary());
+    // The batch back-end (default lm, point-to-plane) lowers the error of
+    // tracking alone and the cost of the graph.
+    let tracked = trajectory_error(&out.tracked_poses, &truth, 1.0).unwrap();
+    eprintln!("office, 40 frames, tracking alone: {}", tracked.summary());
+    assert!(
+        e.ate_rmse < tracked.ate_rmse,
+        "{} vs {}",
+        e.summary(),
+        tracked.summary()
+    );
+    let report = out.backend.as_ref().expect("back-end report");
+    assert!(report.final_cost < report.initial_cost);
+    assert_eq!(out.graph.values.poses.len(), 40);
     // Walls in every direction: no frame after the first is degenerate.
     assert!(out
         .reports
@@ -42,6 +55,30 @@ fn office_trajectory_is_accurate() {
         specular::io::PlaneKind::Reflective,
     ] {
         assert!(kinds.contains(&k), "{kinds:?}");
+    }
+}
+
+#[test]
+fn every_backend_runs_on_one_sequence_and_average_keeps_the_tracked_poses() {
+    let seq = simulated("office", 12);
+    let truth = seq.poses.clone().unwrap();
+    let mut config = Config::resolve("default").unwrap();
+    for name in ["average", "gn", "lm"] {
+        config.backend.name = name.parse().unwrap();
+        let out = run_slam(&seq, &config, Some(truth[0])).unwrap();
+        let report = out.backend.as_ref().expect("back-end report");
+        assert!(report.final_cost <= report.initial_cost + 1e-9, "{name}");
+        if name == "average" {
+            assert_eq!(out.poses, out.tracked_poses);
+        } else {
+            // The first pose is the gauge: it does not move.
+            assert_eq!(out.poses[0], out.tracked_poses[0], "{name}");
+        }
+    }
+    config.backend.name = "factrs".parse().unwrap();
+    if !cfg!(feature = "factrs") {
+        let err = run_slam(&seq, &config, Some(truth[0])).unwrap_err();
+        assert!(err.to_string().contains("factrs"), "{err}");
     }
 }
 

@@ -107,7 +107,7 @@ impl Default for BackendParams {
             plane_factor: PlaneFactorKind::PointToPlane,
             plane_normal_sigma: 0.01,
             plane_offset_sigma: 0.02,
-            point_sigma: 0.03,
+            point_sigma: 0.1,
             odometry_translation_sigma: 0.05,
             odometry_rotation_sigma: 0.01,
             average_second_weight: 3.0,

@@ -36,11 +36,22 @@ pub struct SlamArgs {
     /// Print milliseconds per frame for every stage.
     #[arg(long)]
     pub timings: bool,
+    /// Back-end run after tracking: average (the paper), gn, lm, factrs
+    /// (overrides `[backend] name`).
+    #[arg(long)]
+    pub backend: Option<String>,
+    /// Also write the back-end's factor graph (initial values = tracking)
+    /// as JSON (docs/graph-format.md), e.g. for paper/gtsam_solve.py.
+    #[arg(long)]
+    pub export_graph: Option<PathBuf>,
 }
 
 /// Run `slam`.
 pub fn run(args: SlamArgs) -> Result<()> {
-    let config = load_config(&args.config)?;
+    let mut config = load_config(&args.config)?;
+    if let Some(name) = &args.backend {
+        config.backend.name = name.parse()?;
+    }
     let mut load_timings = StageTimings::default();
     let mut sequence = Sequence::load(
         &args.frames,
@@ -108,10 +119,21 @@ pub fn run(args: SlamArgs) -> Result<()> {
         std::io::Write::write_all(w, config.to_toml().as_bytes())
     })?;
 
-    // Trajectory error.
-    let trajectory = match &truth {
-        Some(t) => Some(trajectory_error(&slam.poses, t, config.slam.rpe_segment)?),
-        None => None,
+    if let Some(path) = &args.export_graph {
+        slam.graph.write(path)?;
+    }
+
+    // Trajectory error, of the back-end's result and of tracking alone.
+    let (trajectory, tracking) = match &truth {
+        Some(t) => (
+            Some(trajectory_error(&slam.poses, t, config.slam.rpe_segment)?),
+            Some(trajectory_error(
+                &slam.tracked_poses,
+                t,
+                config.slam.rpe_segment,
+            )?),
+        ),
+        None => (None, None),
     };
     let degenerate = slam.reports.iter().filter(|r| r.is_degenerate()).count();
     let fallback = slam.reports.iter().filter(|r| r.fallback).count();
@@ -145,6 +167,16 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "landmarks": slam.map.landmarks.len(),
         "frames_per_cpu_second": fps,
         "trajectory": trajectory,
+        "trajectory_tracking_only": tracking,
+        "backend": config.backend.name.as_str(),
+        "backend_report": slam.backend.as_ref().map(|r| json!({
+            "initial_cost": r.initial_cost,
+            "final_cost": r.final_cost,
+            "iterations": r.iterations,
+            "converged": r.converged,
+            "seconds": r.total_seconds,
+            "poses_with_unconstrained_directions": r.observability.weak.len(),
+        })),
         "classification": classification,
         "classification_true_poses": reference,
     });
@@ -165,6 +197,19 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "poses.txt, planes.json, frames.csv, metrics.json in {}",
         out.display()
     );
+    if let Some(r) = &slam.backend {
+        println!(
+            "back-end {}: cost {:.6e} -> {:.6e} in {} iterations, {:.1} ms",
+            config.backend.name.as_str(),
+            r.initial_cost,
+            r.final_cost,
+            r.iterations,
+            r.total_seconds * 1e3
+        );
+    }
+    if let Some(t) = &tracking {
+        println!("trajectory, tracking alone: {}", t.summary());
+    }
     if let Some(t) = &trajectory {
         println!("trajectory: {}", t.summary());
     }

@@ -18,20 +18,29 @@ use rayon::prelude::*;
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
 use super::single_scan::{check_frame, organize_and_detect};
 use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
+use crate::backend::{backend, BackendParams, FactorGraph, SolveReport};
 use crate::cloud::Frame;
 use crate::config::Config;
 use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtractor};
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
+use crate::slam::graph::{optimized_poses, tracking_graph, update_map};
 use crate::slam::{FrameReport, Tracker};
 use crate::Result;
 
 /// What the SLAM pipeline produces.
 #[derive(Debug, Clone)]
 pub struct SlamOutput {
-    /// Estimated `T_world_sensor` per frame, sequence order.
+    /// Estimated `T_world_sensor` per frame, sequence order: the back-end's
+    /// result.
     pub poses: Vec<Isometry3<f64>>,
+    /// The poses of tracking alone, before the back-end.
+    pub tracked_poses: Vec<Isometry3<f64>>,
+    /// What the back-end did (`None` for fewer than two frames).
+    pub backend: Option<SolveReport>,
+    /// The back-end's factor graph, with tracking's estimates as its values.
+    pub graph: FactorGraph,
     /// The final plane map (ordinary, ground and reflective landmarks).
     pub map: PlaneMap,
     /// One report per frame.
@@ -136,15 +145,50 @@ pub fn run_slam(
         degenerate = reports.iter().filter(|r| r.is_degenerate()).count(),
         "tracked"
     );
+    // 3. Back-end: the whole pose-plane graph at once.
+    let (mut map, log) = tracker.into_parts();
+    let start = Instant::now();
+    let graph = tracking_graph(&log, &map, &config.backend)?;
+    let (optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;
+    timings.add("backend", start.elapsed());
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     Ok(SlamOutput {
-        poses,
-        map: tracker.into_map(),
+        poses: optimized,
+        tracked_poses: poses,
+        backend: report,
+        graph,
+        map,
         reports,
         frame_times,
         timings,
     })
+}
+
+/// Optimise the graph of a tracking run ([`tracking_graph`]) with the
+/// configured back-end; the map's planes move to the result. Returns the
+/// poses in frame order and the back-end's report (`None`, tracked poses
+/// unchanged, for fewer than two frames).
+pub fn optimize_batch(
+    graph: &FactorGraph,
+    map: &mut PlaneMap,
+    params: &BackendParams,
+    tracked: &[Isometry3<f64>],
+) -> Result<(Vec<Isometry3<f64>>, Option<SolveReport>)> {
+    if tracked.len() < 2 {
+        return Ok((tracked.to_vec(), None));
+    }
+    let solver = backend(params.name, params)?;
+    let (values, report) = solver.optimize(graph, &graph.values)?;
+    tracing::info!(
+        backend = solver.name(),
+        initial = report.initial_cost,
+        cost = report.final_cost,
+        iterations = report.iterations,
+        "back-end"
+    );
+    update_map(map, &values);
+    Ok((optimized_poses(&values, tracked), Some(report)))
 }
 
 /// Classify every frame with the plane-optimized pipeline using `poses`

@@ -23,6 +23,7 @@
 //! estimated poses) is [`crate::pipeline::slam`].
 
 pub mod association;
+pub mod graph;
 pub mod log;
 pub mod motion;
 pub mod tracker;
