@@ -268,7 +268,10 @@ fn plane_observation_matches_gtsam_error_at_a_hand_computed_case() {
         Translation3::new(0.0, 0.0, 0.5),
         UnitQuaternion::from_scaled_axis(Vector3::x() * (PI / 2.0)),
     );
-    let p = PlaneVar { normal: Vector3::z(), d: 2.0 };
+    let p = PlaneVar {
+        normal: Vector3::z(),
+        d: 2.0,
+    };
     let exact = p.plane().transformed(&x.inverse());
     assert!((exact.d - 2.5).abs() < 1e-12);
     assert!((exact.normal - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);

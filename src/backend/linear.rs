@@ -29,9 +29,11 @@ use crate::{Error, Result};
 /// Why a linear solve failed.
 #[derive(Debug)]
 pub enum LinearError {
-    /// Cholesky met a non-positive pivot: `H (+ λ D)` is not positive
-    /// definite (unobservable direction, gauge freedom, or too little
-    /// damping).
+    /// `H (+ λ D)` is not (numerically) positive definite: Cholesky met a
+    /// non-positive pivot, or the scaled step is more than
+    /// [`SINGULAR_GROWTH`] times the scaled gradient, which means a scaled
+    /// eigenvalue below `1 / SINGULAR_GROWTH` (an unobservable direction,
+    /// gauge freedom, or too little damping).
     NotPositiveDefinite,
     /// Anything else (no information on a variable, non-finite numbers).
     Other(Error),
@@ -42,6 +44,13 @@ impl From<Error> for LinearError {
         LinearError::Other(e)
     }
 }
+
+/// Largest ratio `‖y‖∞ / ‖D g‖∞` of the scaled system accepted as a real
+/// solution. The scaled `H` has a unit diagonal, so its largest eigenvalue is
+/// at least 1 and a larger ratio proves a condition number above this bound:
+/// a tiny positive pivot in an exactly singular direction, which Cholesky
+/// does not report, is caught here instead of returning a wild step.
+pub const SINGULAR_GROWTH: f64 = 1e10;
 
 /// Wall-clock seconds spent in the last assembly / factorisation / solve.
 #[derive(Debug, Clone, Copy, Default)]
@@ -338,8 +347,10 @@ impl LinearSystem {
         };
         let t1 = Instant::now();
         let n = self.step.len();
+        let mut rhs_max = 0.0f64;
         for i in 0..n {
             self.step[i] = -self.g[i] * self.scale[i];
+            rhs_max = rhs_max.max(self.step[i].abs());
         }
         llt.solve_in_place_with_conj(
             Conj::No,
@@ -347,13 +358,15 @@ impl LinearSystem {
             Par::Seq,
             MemStack::new(&mut self.mem),
         );
+        let step_max = self.step.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let singular = !(step_max <= SINGULAR_GROWTH * rhs_max);
         for i in 0..n {
             self.step[i] *= self.scale[i];
         }
         let t2 = Instant::now();
         self.timings.factorization = (t1 - t0).as_secs_f64();
         self.timings.solve = (t2 - t1).as_secs_f64();
-        if !self.step.iter().all(|v| v.is_finite()) {
+        if singular || !self.step.iter().all(|v| v.is_finite()) {
             return Err(LinearError::NotPositiveDefinite);
         }
         Ok(&self.step)
