@@ -181,6 +181,27 @@ proptest! {
         }
     }
 
+    #[test]
+    fn unit3_error_vector_jacobian_matches_differences(p in unit(), q in unit()) {
+        prop_assume!(clear_axis(&p));
+        let (e, jac) = unit3::error_vector_with_jacobian(&p, &q);
+        // Bᵀ q: norm sin θ.
+        let sin = p.cross(&q).norm();
+        prop_assert!((e.norm() - sin).abs() < 1e-12);
+        let b = unit3::basis(&p);
+        let h = 1e-6;
+        for i in 0..2 {
+            let mut d = Vector2::zeros();
+            d[i] = h;
+            let ep = unit3::error_vector_with_jacobian(&unit3::retract(&p, &d), &q).0;
+            let em = unit3::error_vector_with_jacobian(&unit3::retract(&p, &-d), &q).0;
+            let numeric = (ep - em) / (2.0 * h);
+            let analytic = jac * b.column(i);
+            prop_assert!((analytic - numeric).norm() < 1e-6 * (1.0 + numeric.norm()),
+                "dir {i}: {analytic} vs {numeric}");
+        }
+    }
+
     // -------------------------------------------------------------- factors
 
     #[test]
