@@ -16,7 +16,11 @@
 use std::time::Instant;
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
+use faer::perm::PermRef;
+use faer::sparse::linalg::amd;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -43,6 +47,48 @@ impl From<Error> for LinearError {
     fn from(e: Error) -> Self {
         LinearError::Other(e)
     }
+}
+
+/// Fill-reducing ordering computed on the block (variable) graph and
+/// expanded to scalar columns, keeping each variable's columns together:
+/// AMD on `#variables` nodes instead of `#unknowns` is several times cheaper
+/// and gives the supernodal factorisation whole variable blocks.
+fn block_amd(
+    rows_of: &[Vec<u32>],
+    offsets: &[usize],
+    dims: &[usize],
+) -> Result<(Vec<usize>, Vec<usize>)> {
+    let nvars = rows_of.len();
+    let mut col_ptr = Vec::with_capacity(nvars + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0usize);
+    for rows in rows_of {
+        row_idx.extend(rows.iter().map(|&r| r as usize));
+        col_ptr.push(row_idx.len());
+    }
+    let nnz = row_idx.len();
+    let blocks = SymbolicSparseColMat::<usize>::new_checked(nvars, nvars, col_ptr, None, row_idx);
+    let mut bperm = vec![0usize; nvars];
+    let mut bperm_inv = vec![0usize; nvars];
+    let mut mem = MemBuffer::new(amd::order_scratch::<usize>(nvars, nnz));
+    amd::order(
+        &mut bperm,
+        &mut bperm_inv,
+        blocks.as_ref(),
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    )
+    .map_err(|e| Error::Input(format!("AMD ordering failed: {e:?}")))?;
+    let n: usize = dims.iter().sum();
+    let mut perm = Vec::with_capacity(n);
+    for &v in &bperm {
+        perm.extend(offsets[v]..offsets[v] + dims[v]);
+    }
+    let mut perm_inv = vec![0usize; n];
+    for (new, &old) in perm.iter().enumerate() {
+        perm_inv[old] = new;
+    }
+    Ok((perm, perm_inv))
 }
 
 /// Largest ratio `‖y‖∞ / ‖D g‖∞` of the scaled system accepted as a real
@@ -190,10 +236,11 @@ impl LinearSystem {
 
         let nnz = row_idx.len();
         let symbolic = SymbolicSparseColMat::<usize>::new_checked(n, n, col_ptr, None, row_idx);
+        let (perm, perm_inv) = block_amd(&rows_of, &ordering.offsets, &dims)?;
         let cholesky = factorize_symbolic_cholesky(
             symbolic.as_ref(),
             Side::Lower,
-            Default::default(),
+            SymmetricOrdering::Custom(PermRef::new_checked(&perm, &perm_inv, n)),
             Default::default(),
         )
         .map_err(|e| Error::Input(format!("symbolic Cholesky failed: {e:?}")))?;
