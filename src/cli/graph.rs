@@ -35,6 +35,12 @@ enum GraphCommand {
         /// Plane observations per pose.
         #[arg(long, default_value_t = 10)]
         observations: usize,
+        /// Odometry noise: translation sigma (m); drives the initial drift.
+        #[arg(long, default_value_t = 0.05)]
+        odometry_sigma_t: f64,
+        /// Odometry noise: rotation sigma (rad).
+        #[arg(long, default_value_t = 0.01)]
+        odometry_sigma_r: f64,
     },
     /// Solve a graph file and print {initial_error, final_error, iterations,
     /// seconds, ...} as JSON.
@@ -83,11 +89,15 @@ pub fn run(args: GraphArgs) -> Result<()> {
             seed,
             factor,
             observations,
+            odometry_sigma_t,
+            odometry_sigma_r,
         } => {
             let s = synthetic(&SyntheticParams {
                 poses,
                 seed,
                 observations_per_pose: observations,
+                odometry_translation_sigma: odometry_sigma_t,
+                odometry_rotation_sigma: odometry_sigma_r,
                 factor: match factor {
                     FactorArg::Plane => PlaneFactorKind::PlaneToPlane,
                     FactorArg::Point => PlaneFactorKind::PointToPlane,
