@@ -254,7 +254,7 @@ fn singular_problems_are_clear_errors() {
 fn corridor_axis_is_reported() {
     // The corridor runs at 30° from x, so no variable is exactly free and
     // the singular direction must be found numerically.
-    let yaw = UnitQuaternion::from_scaled_axis(Vector3::z() * 0.5236);
+    let yaw = UnitQuaternion::from_scaled_axis(Vector3::z() * std::f64::consts::FRAC_PI_6);
     let axis = yaw * Vector3::x();
     let side = yaw * Vector3::y();
     let mut g = FactorGraph::new();

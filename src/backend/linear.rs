@@ -370,9 +370,14 @@ impl LinearSystem {
             self.scale[i] = 1.0 / hii.sqrt();
         }
         let rows = self.symbolic.row_idx();
-        for k in 0..self.h.len() {
-            self.h_scaled[k] =
-                self.h[k] * self.scale[rows[k]] * self.scale[self.value_col[k] as usize];
+        for (((out, &h), &row), &col) in self
+            .h_scaled
+            .iter_mut()
+            .zip(&self.h)
+            .zip(rows)
+            .zip(&self.value_col)
+        {
+            *out = h * self.scale[row] * self.scale[col as usize];
         }
         for &d in &self.diag {
             self.h_scaled[d] = 1.0 + lambda;
