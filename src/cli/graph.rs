@@ -74,9 +74,13 @@ enum FactorArg {
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
 enum BackendArg {
+    /// The paper's weighted plane average (poses unchanged).
     Average,
+    /// Sparse Gauss-Newton.
     Gn,
+    /// Sparse Levenberg-Marquardt.
     Lm,
+    /// factrs (not built yet: a clear error).
     Factrs,
 }
 
