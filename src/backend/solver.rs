@@ -320,49 +320,40 @@ fn run(
                 };
                 let accepted = rho > 0.0 && new_cost < cost;
                 let mut assembly_seconds = 0.0;
+                let old = cost;
                 if accepted {
-                    let old = cost;
                     values = candidate;
                     cost = sys.assemble(graph, &values)?;
                     assembly_seconds = sys.timings.assembly;
                     totals.assembly += assembly_seconds;
                     lambda *= params.lambda_decrease;
                     nu = 2.0;
-                    stats.push(IterationStats {
-                        iteration,
-                        cost,
-                        lambda,
-                        accepted,
-                        assembly_seconds,
-                        factorization_seconds: fact_s,
-                        solve_seconds: solve_s,
-                        seconds: t_iter.elapsed().as_secs_f64(),
-                    });
-                    if let Some(t) = check_convergence(params, old, cost, step_norm) {
-                        termination = t;
-                        break;
-                    }
                 } else {
                     lambda = (lambda * nu).max(1e-12);
                     nu *= 2.0;
-                    stats.push(IterationStats {
-                        iteration,
-                        cost,
-                        lambda,
-                        accepted,
-                        assembly_seconds,
-                        factorization_seconds: fact_s,
-                        solve_seconds: solve_s,
-                        seconds: t_iter.elapsed().as_secs_f64(),
-                    });
-                    if step_norm < params.step_tolerance {
-                        termination = Termination::SmallStep;
-                        break;
-                    }
-                    if lambda > params.max_lambda {
-                        termination = Termination::DampingLimit;
-                        break;
-                    }
+                }
+                stats.push(IterationStats {
+                    iteration,
+                    cost,
+                    lambda,
+                    accepted,
+                    assembly_seconds,
+                    factorization_seconds: fact_s,
+                    solve_seconds: solve_s,
+                    seconds: t_iter.elapsed().as_secs_f64(),
+                });
+                let stop = if accepted {
+                    check_convergence(params, old, cost, step_norm)
+                } else if step_norm < params.step_tolerance {
+                    Some(Termination::SmallStep)
+                } else if lambda > params.max_lambda {
+                    Some(Termination::DampingLimit)
+                } else {
+                    None
+                };
+                if let Some(t) = stop {
+                    termination = t;
+                    break;
                 }
             }
         }
