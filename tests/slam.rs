@@ -63,9 +63,14 @@ fn every_backend_runs_on_one_sequence_and_average_keeps_the_tracked_poses() {
     let seq = simulated("office", 12);
     let truth = seq.poses.clone().unwrap();
     let mut config = Config::resolve("default").unwrap();
+    // One tracking run shared by every back-end gives what each run alone
+    // gives (no sliding window in the default configuration).
+    let tracked = specular::pipeline::track_sequence(&seq, &config, Some(truth[0])).unwrap();
     for name in ["average", "gn", "lm"] {
         config.backend.name = name.parse().unwrap();
         let out = run_slam(&seq, &config, Some(truth[0])).unwrap();
+        let shared = specular::pipeline::optimize_tracked(tracked.clone(), &config).unwrap();
+        assert_eq!(out.poses, shared.poses, "{name}");
         let report = out.backend.as_ref().expect("back-end report");
         assert!(report.final_cost <= report.initial_cost + 1e-9, "{name}");
         if name == "average" {

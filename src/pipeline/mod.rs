@@ -13,7 +13,7 @@ pub mod timings;
 pub use plane_optimized::{run_plane_optimized, PlaneOptimizedOutput};
 pub use sequence::Sequence;
 pub use single_scan::run_single_scan;
-pub use slam::{run_slam, SlamOutput};
+pub use slam::{optimize_tracked, run_slam, track_sequence, SlamOutput, Tracked};
 pub use timings::StageTimings;
 
 use crate::classify::Class;

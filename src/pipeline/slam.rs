@@ -26,7 +26,7 @@ use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
 use crate::slam::graph::{optimized_poses, tracking_graph, update_map};
-use crate::slam::{FrameReport, Tracker};
+use crate::slam::{FrameReport, Tracker, TrackingLog};
 use crate::Result;
 
 /// What the SLAM pipeline produces.
@@ -79,13 +79,29 @@ pub fn frame_planes(
     Ok((planes, t))
 }
 
-/// Run Reflection SLAM over `sequence` (its poses, if any, are not used).
-/// The first frame gets pose `origin` (identity when `None`).
+/// Run Reflection SLAM over `sequence` (its poses, if any, are not used):
+/// tracking ([`track_sequence`]), then the batch back-end
+/// ([`optimize_tracked`]). The first frame gets pose `origin` (identity
+/// when `None`).
 pub fn run_slam(
     sequence: &Sequence,
     config: &Config,
     origin: Option<Isometry3<f64>>,
 ) -> Result<SlamOutput> {
+    let wall = Instant::now();
+    let tracked = track_sequence(sequence, config, origin)?;
+    let mut out = optimize_tracked(tracked, config)?;
+    out.timings.wall = wall.elapsed();
+    Ok(out)
+}
+
+/// The front end and tracking of Reflection SLAM over `sequence` (with the
+/// sliding window when configured), without the batch back-end.
+pub fn track_sequence(
+    sequence: &Sequence,
+    config: &Config,
+    origin: Option<Isometry3<f64>>,
+) -> Result<Tracked> {
     let wall = Instant::now();
     let sensor = SensorModel::resolve(&config.sensor)?;
     for i in 0..sequence.len() {
@@ -149,16 +165,51 @@ pub fn run_slam(
         degenerate = reports.iter().filter(|r| r.is_degenerate()).count(),
         "tracked"
     );
-    // 3. Back-end: the whole pose-plane graph at once.
-    let (mut map, log) = tracker.into_parts();
+    let (map, log) = tracker.into_parts();
+    timings.frames = sequence.len();
+    timings.wall = wall.elapsed();
+    Ok(Tracked {
+        map,
+        log,
+        reports,
+        frame_times,
+        timings,
+    })
+}
+
+/// What tracking alone produced, before the batch back-end.
+#[derive(Debug, Clone)]
+pub struct Tracked {
+    /// The tracker's map.
+    pub map: PlaneMap,
+    /// Observations and odometry (the back-end's input).
+    pub log: TrackingLog,
+    /// One report per frame.
+    pub reports: Vec<FrameReport>,
+    /// Processing time per frame (front end plus tracking).
+    pub frame_times: Vec<Duration>,
+    /// Time per stage.
+    pub timings: StageTimings,
+}
+
+/// Run the batch back-end of `config` on a tracking result (step 3: the
+/// whole pose-plane graph at once). Tracking does
+/// not depend on the back-end unless a sliding window is configured, so
+/// back-ends can be compared on one tracking run by cloning it.
+pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput> {
+    let Tracked {
+        mut map,
+        log,
+        reports,
+        frame_times,
+        mut timings,
+    } = tracked;
     // Tracking's poses as the sliding window left them.
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
     let start = Instant::now();
     let graph = tracking_graph(&log, &map, &config.backend)?;
     let (optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;
     timings.add("backend", start.elapsed());
-    timings.frames = sequence.len();
-    timings.wall = wall.elapsed();
     Ok(SlamOutput {
         poses: optimized,
         tracked_poses: poses,
