@@ -14,9 +14,12 @@ cmd=$1
 venv=$2
 case "$cmd" in
 install)
-    if [ ! -x "$venv/bin/kiss_icp_pipeline" ]; then
+    if [ ! -x "$venv/bin/python" ]; then
         python3 -m venv "$venv"
-        "$venv/bin/pip" install --quiet --disable-pip-version-check "kiss-icp==$VERSION"
+    fi
+    # PyYAML reads the --config file.
+    if ! "$venv/bin/python" -c "import kiss_icp, yaml" 2>/dev/null; then
+        "$venv/bin/pip" install --quiet --disable-pip-version-check "kiss-icp==$VERSION" pyyaml
     fi
     "$venv/bin/kiss_icp_pipeline" --version
     ;;
@@ -25,7 +28,8 @@ run)
     frames=$4
     out=$5
     mkdir -p "$out"
-    kiss_icp_out_dir="$out" "$venv/bin/kiss_icp_pipeline" --config "$config" "$frames"
+    export kiss_icp_out_dir="$out"
+    exec "$venv/bin/kiss_icp_pipeline" --config "$config" "$frames"
     ;;
 *)
     echo "usage: $0 install VENV | run VENV CONFIG FRAMES_DIR OUT" >&2

@@ -1,7 +1,8 @@
 //! `specular reproduce`: the paper's experiments, side by side with its
 //! published tables (see [`specular::reproduce`]). Writes `results.json`,
 //! `tables.md`, `timings.json`, `timings.md` and `around_corner.png` into
-//! `--out`, and the README (template `paper/README.in.md`) beside it.
+//! `--out`, and fills the generated blocks of the README beside it (from
+//! the template `paper/README.in.md` when it does not exist yet).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -9,12 +10,13 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use specular::reproduce::{
-    self, data::resolve_real, tables, timing, KissIcp, Options, Source, SCENES,
+    self, data::resolve_real, readme, tables, timing, KissIcp, Options, Source, SCENES,
 };
 
 use super::bundled_sample;
 
-/// The README template: hand-written text around the generated parts.
+/// The README template: hand-written text around the generated blocks
+/// (used when the README does not exist yet).
 const README_TEMPLATE: &str = include_str!("../../paper/README.in.md");
 
 /// Arguments of `reproduce`.
@@ -134,11 +136,23 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     } else {
         "(no figure: the mirror-room scene was not run)".into()
     };
-    let text = README_TEMPLATE
-        .replace("{{command}}", &command)
-        .replace("{{tables}}", tables_md.trim_end())
-        .replace("{{figure}}", &figure)
-        .replace("{{timings}}", timings_md.trim_end());
+    let blocks = [
+        ("command", format!("```sh\n{command}\n```")),
+        ("headline", tables::headline(&results)),
+        ("tables", tables_md),
+        ("figure", figure),
+        ("timings", timings_md),
+    ];
+    let names: Vec<&str> = blocks.iter().map(|(n, _)| *n).collect();
+    // The hand-written text of an existing README is kept; a README without
+    // every block starts again from the template.
+    let existing = std::fs::read_to_string(&readme).ok();
+    let base = existing
+        .as_deref()
+        .filter(|t| readme::has_blocks(t, &names))
+        .unwrap_or(README_TEMPLATE);
+    let pairs: Vec<(&str, &str)> = blocks.iter().map(|(n, c)| (*n, c.as_str())).collect();
+    let text = readme::fill(base, &pairs);
     reproduce::write_text(&readme, &text)?;
     println!(
         "reproduce: {} datasets in {total:.0} s; {} (tables.md, results.json, timings.md, timings.json, {}) and {}",

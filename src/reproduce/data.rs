@@ -181,7 +181,9 @@ impl Dataset {
             .sequence
             .frames
             .iter()
-            .fold(LabelCounts::default(), |acc, f| acc.merge(LabelCounts::of(f)));
+            .fold(LabelCounts::default(), |acc, f| {
+                acc.merge(LabelCounts::of(f))
+            });
         DatasetInfo {
             name: self.name.clone(),
             kind: self.kind,

@@ -9,7 +9,7 @@
 //! script `paper/kiss_icp.sh` is embedded in the binary.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command, ExitStatus, Stdio};
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use std::io::Write;
@@ -62,7 +62,8 @@ impl KissIcp {
         self.sh(&["install", &venv.to_string_lossy()])
     }
 
-    /// Run `sh kiss_icp.sh ARGS`, an error with its stderr tail on failure.
+    /// Run `sh kiss_icp.sh ARGS` to completion, an error with the tail of
+    /// its output on failure.
     fn sh(&self, args: &[&str]) -> Result<()> {
         let out = Command::new("sh")
             .arg(self.script())
@@ -72,45 +73,115 @@ impl KissIcp {
         if out.status.success() {
             return Ok(());
         }
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        let tail: Vec<&str> = stderr.lines().rev().take(5).collect();
-        Err(Error::Input(format!(
-            "{} {} failed ({}): {}",
-            self.script().display(),
-            args.first().unwrap_or(&""),
-            out.status,
-            tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
-        )))
+        let text = format!(
+            "{}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        Err(self.failure(args.first().unwrap_or(&""), out.status, &text))
     }
 
-    /// Odometry over `sequence` (first returns only): one pose per frame,
-    /// the first at the identity.
-    pub fn run(&self, name: &str, sequence: &Sequence) -> Result<Vec<Isometry3<f64>>> {
+    /// The error of a failed script run: its status and the last lines of
+    /// its output (KISS-ICP reports some errors on stdout).
+    fn failure(&self, what: &str, status: ExitStatus, output: &str) -> Error {
+        let tail: Vec<&str> = output
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .rev()
+            .take(3)
+            .collect();
+        Error::Input(format!(
+            "{} {what} failed ({status}): {}",
+            self.script().display(),
+            tail.into_iter().rev().collect::<Vec<_>>().join(" | ")
+        ))
+    }
+
+    /// Start odometry over `sequence` (first returns only) in the
+    /// background; [`KissRun::finish`] waits for its poses. The scans are
+    /// exported first, so the sequence may be dropped meanwhile.
+    pub fn start(&self, name: &str, sequence: &Sequence) -> Result<KissRun> {
         let safe: String = name
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
             .collect();
-        let frames = self.work.join(&safe).join("scans");
-        let logs = self.work.join(&safe).join("logs");
-        export_scans(&frames, sequence)?;
-        let result = self.sh(&[
-            "run",
-            &self.venv().to_string_lossy(),
-            &self.work.join("config.yaml").to_string_lossy(),
-            &frames.to_string_lossy(),
-            &logs.to_string_lossy(),
-        ]);
-        let _ = std::fs::remove_dir_all(&frames);
-        result?;
-        let poses = read_kitti_poses(&find_poses(&logs.join("latest"))?)?;
-        if poses.len() != sequence.len() {
+        let dir = self.work.join(&safe);
+        let scans = dir.join("scans");
+        let logs = dir.join("logs");
+        export_scans(&scans, sequence)?;
+        std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
+        let output = dir.join("output.txt");
+        let file = std::fs::File::create(&output).map_err(|e| Error::io(&output, e))?;
+        let file2 = file.try_clone().map_err(|e| Error::io(&output, e))?;
+        let child = Command::new("sh")
+            .arg(self.script())
+            .arg("run")
+            .arg(self.venv())
+            .arg(self.work.join("config.yaml"))
+            .arg(&scans)
+            .arg(&logs)
+            .stdout(Stdio::from(file))
+            .stderr(Stdio::from(file2))
+            .spawn()
+            .map_err(|e| Error::io(self.script(), e))?;
+        Ok(KissRun {
+            kiss: self.clone(),
+            child: Some(child),
+            scans,
+            logs,
+            output,
+            frames: sequence.len(),
+        })
+    }
+}
+
+/// A KISS-ICP run in the background.
+#[derive(Debug)]
+pub struct KissRun {
+    kiss: KissIcp,
+    /// `None` once waited for.
+    child: Option<Child>,
+    scans: PathBuf,
+    logs: PathBuf,
+    output: PathBuf,
+    frames: usize,
+}
+
+impl KissRun {
+    /// Wait for the run and read its poses (one per frame, the first at
+    /// the identity); the exported scans are removed.
+    pub fn finish(mut self) -> Result<Vec<Isometry3<f64>>> {
+        let status = match self.child.take() {
+            Some(mut child) => child.wait().map_err(|e| Error::io(self.kiss.script(), e)),
+            None => Err(Error::Input("KISS-ICP run already finished".into())),
+        };
+        let _ = std::fs::remove_dir_all(&self.scans);
+        let status = status?;
+        if !status.success() {
+            let text = std::fs::read_to_string(&self.output).unwrap_or_default();
+            return Err(self.kiss.failure("run", status, &text));
+        }
+        let poses = read_kitti_poses(&find_poses(&self.logs.join("latest"))?)?;
+        if poses.len() != self.frames {
             return Err(Error::Input(format!(
                 "KISS-ICP returned {} poses for {} frames",
                 poses.len(),
-                sequence.len()
+                self.frames
             )));
         }
         Ok(poses)
+    }
+}
+
+impl Drop for KissRun {
+    /// A run abandoned (an error elsewhere) is stopped, not left running.
+    fn drop(&mut self) {
+        if let Some(mut child) = self.child.take() {
+            let _ = child.kill();
+            let _ = child.wait();
+            let _ = std::fs::remove_dir_all(&self.scans);
+        }
     }
 }
 
@@ -168,8 +239,7 @@ pub fn parse_kitti_poses(text: &str) -> std::result::Result<Vec<Isometry3<f64>>,
                 return Err(format!("line {}: expected 12 finite numbers", i + 1));
             }
             let r = Matrix3::new(v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10]);
-            let rotation =
-                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
+            let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
             let t = Translation3::from(Vector3::new(v[3], v[7], v[11]));
             Ok(Isometry3::from_parts(t, rotation))
         })

@@ -96,7 +96,12 @@ pub fn measure(dir: &Path, repeats: usize) -> Result<TimingReport> {
 fn once(frames: &Path, poses: &Path, config: &Config) -> Result<(Duration, StageTimings)> {
     let start = Instant::now();
     let mut timings = StageTimings::default();
-    let sequence = Sequence::load(frames, Some(poses), config.input.pose_tolerance, &mut timings)?;
+    let sequence = Sequence::load(
+        frames,
+        Some(poses),
+        config.input.pose_tolerance,
+        &mut timings,
+    )?;
     let run = match config.method {
         Method::SingleScan => run_single_scan(&sequence, config)?,
         Method::PlaneOptimized => run_plane_optimized(&sequence, config)?.run,

@@ -39,7 +39,10 @@ pub fn around_corner_png(
         f64::from(h - 120),
     );
     let panels = [
-        ("Reflections as measured (virtual, behind the mirror)", before),
+        (
+            "Reflections as measured (virtual, behind the mirror)",
+            before,
+        ),
         ("Reflections mirrored back (around the corner)", after),
     ];
     render(path, (w, h), |root| {
