@@ -25,8 +25,9 @@ pub struct ReproduceArgs {
     /// Output directory of the results (tables, JSON, figures).
     #[arg(long, default_value = "paper/results")]
     pub out: PathBuf,
-    /// A further real 3DRef-format directory (`*.ply` frames, directly or in
-    /// `frames/`, and `poses.txt` or `hesai_pose.txt`); repeatable.
+    /// A further real 3DRef-format directory (`*.ply` frames in `frames/`,
+    /// in `raycast/hesai/` as in the 3DRef release's `raw/seqN/`, or
+    /// directly; `poses.txt` or `hesai_pose.txt`); repeatable.
     #[arg(long)]
     pub data: Vec<PathBuf>,
     /// Cut the simulated sequences to their first frames and time one run
@@ -117,10 +118,15 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     let repeats = if args.quick { 1 } else { 3 };
     let timings = timing::measure(&timing_dir, repeats)?;
     let total = started.elapsed().as_secs_f64();
-    let timings_md = tables::timing_markdown(&timings, total, &command);
+    // The 1, 5 and 15 minute load averages (Linux): other work on the
+    // machine shows in every time measured.
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(" "));
+    let timings_md = tables::timing_markdown(&timings, total, load.as_deref(), &command);
     reproduce::write_json(
         &out.join("timings.json"),
-        &serde_json::json!({ "total_wall_s": total, "timing": timings }),
+        &serde_json::json!({ "total_wall_s": total, "load_average": load, "timing": timings }),
     )?;
     reproduce::write_text(&out.join("timings.md"), &timings_md)?;
 

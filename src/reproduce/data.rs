@@ -17,7 +17,8 @@ use crate::{Error, Result};
 /// Where a dataset comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Source {
-    /// A 3DRef-format directory: `*.ply` frames (directly or in `frames/`)
+    /// A 3DRef-format directory: `*.ply` frames (in `frames/`, in
+    /// `raycast/hesai/` as in the 3DRef release's `raw/seqN/`, or directly)
     /// and a TUM pose file (`poses.txt` or `hesai_pose.txt`).
     Real(PathBuf),
     /// A built-in simulator scene, simulated in memory.
@@ -75,11 +76,13 @@ pub fn resolve_real(dir: &Path) -> Result<(PathBuf, PathBuf)> {
             dir.display()
         )));
     }
-    let frames = if dir.join("frames").is_dir() {
-        dir.join("frames")
-    } else {
-        dir.to_path_buf()
-    };
+    // `frames/` (as `specular simulate` and the bundled sample), the
+    // 3DRef release layout `raw/seqN/raycast/hesai/`, or the directory
+    // itself (as the shared ten frames).
+    let frames = [dir.join("frames"), dir.join("raycast").join("hesai")]
+        .into_iter()
+        .find(|d| d.is_dir())
+        .unwrap_or_else(|| dir.to_path_buf());
     let poses = ["poses.txt", "hesai_pose.txt"]
         .iter()
         .map(|f| dir.join(f))
@@ -192,5 +195,35 @@ impl Dataset {
             by_label: counts.by_label,
             labelled: self.sequence.frames.iter().all(|f| f.has_labels),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_three_directory_layouts_resolve_and_a_missing_pose_file_is_named() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path();
+        // 3DRef release layout: raw/seqN/{hesai_pose.txt, raycast/hesai/}.
+        let seq = root.join("seq1");
+        std::fs::create_dir_all(seq.join("raycast/hesai")).unwrap();
+        std::fs::write(seq.join("hesai_pose.txt"), "").unwrap();
+        let (frames, poses) = resolve_real(&seq).unwrap();
+        assert_eq!(frames, seq.join("raycast/hesai"));
+        assert_eq!(poses, seq.join("hesai_pose.txt"));
+        // Simulator / bundled-sample layout: frames/ and poses.txt.
+        let sim = root.join("sim");
+        std::fs::create_dir_all(sim.join("frames")).unwrap();
+        std::fs::write(sim.join("poses.txt"), "").unwrap();
+        assert_eq!(resolve_real(&sim).unwrap().0, sim.join("frames"));
+        // Frames in the directory itself, but no pose file.
+        let flat = root.join("flat");
+        std::fs::create_dir_all(&flat).unwrap();
+        let err = resolve_real(&flat).unwrap_err().to_string();
+        assert!(err.contains("flat") && err.contains("pose"), "{err}");
+        let err = resolve_real(&root.join("missing")).unwrap_err().to_string();
+        assert!(err.contains("missing"), "{err}");
     }
 }

@@ -150,7 +150,7 @@ pub struct Results {
     pub slam: Vec<SlamRow>,
     /// The odometry peer, per simulated dataset.
     pub odometry: Vec<OdometryRow>,
-    /// Whether the around-the-corner figure was drawn.
+    /// What the around-the-corner figure shows (`None`: not drawn).
     pub corner_figure: Option<corner::CornerSummary>,
 }
 
@@ -193,14 +193,14 @@ pub fn run(options: &Options, out: &Path, log: &mut dyn FnMut(&str)) -> Result<R
     };
     for source in &options.sources {
         let started = std::time::Instant::now();
-        let dataset = data::load(source, options.quick)?;
+        let mut dataset = data::load(source, options.quick)?;
         log(&format!(
             "{}: {} frames loaded",
             dataset.name,
             dataset.sequence.len()
         ));
         results.datasets.push(dataset.info());
-        run_dataset(&dataset, kiss.as_ref(), out, &mut results, log)?;
+        run_dataset(&mut dataset, kiss.as_ref(), out, &mut results, log)?;
         log(&format!(
             "{}: done in {:.1} s",
             dataset.name,
@@ -210,23 +210,65 @@ pub fn run(options: &Options, out: &Path, log: &mut dyn FnMut(&str)) -> Result<R
     Ok(results)
 }
 
-/// The experiments on one dataset, appended to `results`.
+/// The experiments on one dataset, appended to `results`: KISS-ICP
+/// started in the background, classification, Reflection SLAM, then
+/// KISS-ICP's result.
 fn run_dataset(
-    dataset: &Dataset,
+    dataset: &mut Dataset,
     kiss: Option<&(&KissIcp, std::result::Result<(), String>)>,
     out: &Path,
     results: &mut Results,
     log: &mut dyn FnMut(&str),
 ) -> Result<()> {
-    let seq = &dataset.sequence;
     // KISS-ICP runs in the background (one thread) while ours run.
     let kiss_run = match kiss {
         Some((kiss, Ok(()))) if dataset.kind == DataKind::Simulated => {
             log(&format!("{}: KISS-ICP started", dataset.name));
-            Some(kiss.start(&dataset.name, seq))
+            Some(kiss.start(&dataset.name, &dataset.sequence))
         }
         _ => None,
     };
+    classify_dataset(dataset, out, results, log)?;
+    let truth = slam_dataset(dataset, results, log)?;
+    if dataset.kind == DataKind::Simulated {
+        let outcome = match kiss {
+            None => OdometryOutcome::NotRun("not run: pass --with-kiss-icp".into()),
+            Some((_, Err(e))) => OdometryOutcome::NotRun(format!("not run: install failed ({e})")),
+            Some((_, Ok(()))) => match kiss_run.map(|run| run.and_then(|r| r.finish())) {
+                Some(Ok(poses)) => {
+                    let segment = dataset.config("default")?.slam.rpe_segment;
+                    OdometryOutcome::Ran(trajectory_error(&poses, &truth, segment)?)
+                }
+                Some(Err(e)) => OdometryOutcome::NotRun(format!("failed: {e}")),
+                None => OdometryOutcome::NotRun("not run".into()),
+            },
+        };
+        log(&format!(
+            "{}: KISS-ICP: {}",
+            dataset.name,
+            match &outcome {
+                OdometryOutcome::Ran(t) => format!("ATE {:.3} m", t.ate_rmse),
+                OdometryOutcome::NotRun(why) => why.clone(),
+            }
+        ));
+        results.odometry.push(OdometryRow {
+            dataset: dataset.name.clone(),
+            method: format!("KISS-ICP {}", kiss_icp::VERSION),
+            outcome,
+        });
+    }
+    Ok(())
+}
+
+/// The three classification methods on one dataset, and the
+/// around-the-corner figure when it is the figure's scene.
+fn classify_dataset(
+    dataset: &Dataset,
+    out: &Path,
+    results: &mut Results,
+    log: &mut dyn FnMut(&str),
+) -> Result<()> {
+    let seq = &dataset.sequence;
     let mut default_po = None;
     for (name, config_name, method) in classification_methods() {
         let mut config = dataset.config(config_name)?;
@@ -260,21 +302,32 @@ fn run_dataset(
             log(&format!("{}: figure {CORNER_PNG} drawn", dataset.name));
         }
     }
-    drop(default_po);
+    Ok(())
+}
 
-    // Reflection SLAM, every back-end, against the true poses.
-    let truth = seq
+/// Reflection SLAM with every back-end on one dataset, scored against its
+/// true poses, which are returned.
+fn slam_dataset(
+    dataset: &mut Dataset,
+    results: &mut Results,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<nalgebra::Isometry3<f64>>> {
+    let truth = dataset
+        .sequence
         .poses
         .clone()
         .ok_or_else(|| Error::Input(format!("{}: SLAM needs true poses", dataset.name)))?;
     let base = dataset.config("default")?;
     for backend in slam_backends() {
         let config = with_backend(&base, &backend)?;
-        let slam = run_slam(seq, &config, Some(truth[0]))?;
+        let slam = run_slam(&dataset.sequence, &config, Some(truth[0]))?;
         let trajectory = trajectory_error(&slam.poses, &truth, config.slam.rpe_segment)?;
-        let mut with_estimate = seq.clone();
-        let classified = classify_with_poses(&mut with_estimate, slam.poses.clone(), &config)?;
-        let metrics = classified.run.confusion(seq).map(|c| c.metrics());
+        // The sequence's true poses are restored afterwards.
+        let classified = classify_with_poses(&mut dataset.sequence, slam.poses.clone(), &config)?;
+        let metrics = classified
+            .run
+            .confusion(&dataset.sequence)
+            .map(|c| c.metrics());
         log(&format!(
             "{}: Reflection SLAM [{backend}]: ATE {:.3} m; {}",
             dataset.name,
@@ -291,35 +344,7 @@ fn run_dataset(
             landmarks: slam.map.landmarks.len(),
         });
     }
-
-    // The odometry peer, on the simulated sequences.
-    if dataset.kind == DataKind::Simulated {
-        let outcome = match kiss {
-            None => OdometryOutcome::NotRun("not run: pass --with-kiss-icp".into()),
-            Some((_, Err(e))) => OdometryOutcome::NotRun(format!("not run: install failed ({e})")),
-            Some((_, Ok(()))) => match kiss_run.map(|run| run.and_then(|r| r.finish())) {
-                Some(Ok(poses)) => {
-                    OdometryOutcome::Ran(trajectory_error(&poses, &truth, base.slam.rpe_segment)?)
-                }
-                Some(Err(e)) => OdometryOutcome::NotRun(format!("failed: {e}")),
-                None => OdometryOutcome::NotRun("not run".into()),
-            },
-        };
-        log(&format!(
-            "{}: KISS-ICP: {}",
-            dataset.name,
-            match &outcome {
-                OdometryOutcome::Ran(t) => format!("ATE {:.3} m", t.ate_rmse),
-                OdometryOutcome::NotRun(why) => why.clone(),
-            }
-        ));
-        results.odometry.push(OdometryRow {
-            dataset: dataset.name.clone(),
-            method: format!("KISS-ICP {}", kiss_icp::VERSION),
-            outcome,
-        });
-    }
-    Ok(())
+    Ok(truth)
 }
 
 /// A one-line summary of metrics for the log.

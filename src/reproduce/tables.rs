@@ -350,7 +350,7 @@ fn trajectory_table(results: &Results) -> String {
         for r in results.slam.iter().filter(|r| r.dataset == d.name) {
             let _ = writeln!(
                 s,
-                "| {} | {:.1} | Reflection SLAM [{}] | {} {} |",
+                "| {} | {:.2} | Reflection SLAM [{}] | {} {} |",
                 data_label(results, &d.name),
                 r.trajectory.path_length,
                 r.backend,
@@ -363,7 +363,7 @@ fn trajectory_table(results: &Results) -> String {
                 OdometryOutcome::Ran(t) => {
                     let _ = writeln!(
                         s,
-                        "| {} | {:.1} | {} | {} – |",
+                        "| {} | {:.2} | {} | {} – |",
                         data_label(results, &d.name),
                         t.path_length,
                         r.method,
@@ -386,7 +386,14 @@ fn trajectory_table(results: &Results) -> String {
 }
 
 /// The machine-dependent timing table, with the original code's figures.
-pub fn timing_markdown(report: &TimingReport, total_wall_s: f64, command: &str) -> String {
+/// `load` is the system's load average at the end of the run, when known
+/// (the machine may be shared).
+pub fn timing_markdown(
+    report: &TimingReport,
+    total_wall_s: f64,
+    load: Option<&str>,
+    command: &str,
+) -> String {
     let mut stages: Vec<String> = Vec::new();
     for r in &report.rows {
         for (name, _) in &r.stages_ms {
@@ -439,7 +446,11 @@ pub fn timing_markdown(report: &TimingReport, total_wall_s: f64, command: &str) 
     );
     let _ = writeln!(
         s,
-        "\nStage times are CPU time summed over the workers; the wall row is elapsed time. The whole `{command}` took {total_wall_s:.0} s of wall time."
+        "\nStage times are CPU time summed over the workers; the wall row is elapsed time. The whole `{command}` took {total_wall_s:.0} s of wall time{}.",
+        load.map_or(String::new(), |l| format!(
+            " (load average at the end: {l}, on {} threads)",
+            report.threads_available
+        ))
     );
     s
 }
