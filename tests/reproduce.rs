@@ -148,6 +148,25 @@ fn a_bad_data_directory_is_named_and_nothing_is_written() {
 }
 
 #[test]
+fn a_readme_without_generated_blocks_is_not_overwritten() {
+    let tmp = tempfile::tempdir().unwrap();
+    let readme = tmp.path().join("README.md");
+    std::fs::write(&readme, "# someone else's README\n").unwrap();
+    let o = reproduce(&[
+        "--quick",
+        "--out",
+        tmp.path().join("results").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("not overwriting"), "{stderr}");
+    assert_eq!(
+        std::fs::read_to_string(&readme).unwrap(),
+        "# someone else's README\n"
+    );
+}
+
+#[test]
 fn backends_are_applied_by_name() {
     let config = Config::resolve("default").unwrap();
     for name in slam_backends() {

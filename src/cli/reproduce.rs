@@ -104,6 +104,11 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
             .then(|| KissIcp::new(args.out.join(".kiss-icp"))),
     };
     let out = &args.out;
+    let readme = args
+        .readme
+        .clone()
+        .unwrap_or_else(|| out.parent().unwrap_or(Path::new(".")).join("README.md"));
+    let base = readme_base(&readme, out)?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let command = command_line(&args);
     let mut log = |line: &str| {
@@ -130,10 +135,6 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     )?;
     reproduce::write_text(&out.join("timings.md"), &timings_md)?;
 
-    let readme = args
-        .readme
-        .clone()
-        .unwrap_or_else(|| out.parent().unwrap_or(Path::new(".")).join("README.md"));
     let figure = if results.corner_figure.is_some() {
         format!(
             "![Mapping around the corner on mirror-room]({})",
@@ -142,23 +143,20 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     } else {
         "(no figure: the mirror-room scene was not run)".into()
     };
-    let blocks = [
-        ("command", format!("```sh\n{command}\n```")),
-        ("headline", tables::headline(&results)),
-        ("tables", tables_md),
-        ("figure", figure),
-        ("timings", timings_md),
+    // Same order as README_BLOCKS.
+    let contents = [
+        format!("```sh\n{command}\n```"),
+        tables::headline(&results),
+        tables_md,
+        figure,
+        timings_md,
     ];
-    let names: Vec<&str> = blocks.iter().map(|(n, _)| *n).collect();
-    // The hand-written text of an existing README is kept; a README without
-    // every block starts again from the template.
-    let existing = std::fs::read_to_string(&readme).ok();
-    let base = existing
-        .as_deref()
-        .filter(|t| readme::has_blocks(t, &names))
-        .unwrap_or(README_TEMPLATE);
-    let pairs: Vec<(&str, &str)> = blocks.iter().map(|(n, c)| (*n, c.as_str())).collect();
-    let text = readme::fill(base, &pairs);
+    let pairs: Vec<(&str, &str)> = README_BLOCKS
+        .iter()
+        .zip(&contents)
+        .map(|(n, c)| (*n, c.as_str()))
+        .collect();
+    let text = readme::fill(&base, &pairs);
     reproduce::write_text(&readme, &text)?;
     println!(
         "reproduce: {} datasets in {total:.0} s; {} (tables.md, results.json, timings.md, timings.json, {}) and {}",
@@ -168,6 +166,25 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         readme.display()
     );
     Ok(())
+}
+
+/// The generated blocks of the README, in their order.
+const README_BLOCKS: [&str; 5] = ["command", "headline", "tables", "figure", "timings"];
+
+/// The text the README is regenerated from, checked before any work: the
+/// existing README with its hand-written text, or the template for a new
+/// one. A file without the blocks is someone else's README (e.g. the
+/// project's, with `--out results`) and is never overwritten.
+fn readme_base(readme: &Path, out: &Path) -> Result<String> {
+    match std::fs::read_to_string(readme) {
+        Ok(text) if readme::has_blocks(&text, &README_BLOCKS) => Ok(text),
+        Ok(_) => anyhow::bail!(
+            "{} exists and has no generated blocks: not overwriting it (pass --readme FILE for the results in {})",
+            readme.display(),
+            out.display()
+        ),
+        Err(_) => Ok(README_TEMPLATE.to_string()),
+    }
 }
 
 /// `out` as seen from the README's directory (the name alone when the README
