@@ -26,6 +26,7 @@
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
 //! | [`viz`] | Foxglove MCAP recordings, PNG plots, Markdown report |
+//! | [`reproduce`] | the paper's experiments side by side with its published tables |
 //!
 //! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
 //! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
@@ -49,6 +50,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod reflect;
 pub mod registration;
+pub mod reproduce;
 pub mod rng;
 pub mod sensor;
 pub mod sim;

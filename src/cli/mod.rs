@@ -6,6 +6,7 @@ mod demo;
 mod detect;
 mod eval;
 mod graph;
+mod reproduce;
 mod simulate;
 mod slam;
 mod visual;
@@ -48,6 +49,8 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Pose-plane factor graphs: export synthetic ones, solve graph files.
     Graph(graph::GraphArgs),
+    /// Reproduce the paper's experiments beside its published tables.
+    Reproduce(reproduce::ReproduceArgs),
     /// Print the effective configuration as TOML (every key with its value).
     Config {
         /// Built-in name (default, paper) or path to a TOML file.
@@ -92,6 +95,7 @@ pub fn run() -> Result<()> {
         Command::Convert(args) => convert::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Graph(args) => graph::run(args),
+        Command::Reproduce(args) => reproduce::run(args),
         Command::Config { config } => {
             print!("{}", load_config(&config)?.to_toml());
             Ok(())

@@ -61,6 +61,19 @@ impl Confusion {
         self.ignored += other.ignored;
     }
 
+    /// Of the true Normal and Glass points, the share predicted Normal or
+    /// Glass, in percent (the recall of the paper's "Indoor Points").
+    pub fn indoor_recall(&self) -> f64 {
+        let c = &self.counts;
+        let truth: u64 = c[0].iter().chain(&c[1]).sum();
+        let kept = c[0][1] + c[0][2] + c[1][1] + c[1][2];
+        if truth == 0 {
+            f64::NAN
+        } else {
+            100.0 * kept as f64 / truth as f64
+        }
+    }
+
     /// Points scored (labels not ignored).
     pub fn total(&self) -> u64 {
         self.counts.iter().flatten().sum()
@@ -245,5 +258,7 @@ mod tests {
         assert!((m.non_reflection_precision - 100.0).abs() < 1e-9);
         // Indoor: predicted N or G = 4 points, 3 of them N or G truly.
         assert!((m.indoor_precision - 75.0).abs() < 1e-9);
+        // Of the 3 true N/G points, all 3 predicted N or G.
+        assert!((conf.indoor_recall() - 100.0).abs() < 1e-9);
     }
 }

@@ -36,12 +36,12 @@ pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) ->
         && !dual_data()
     {
         let what = if sequence.len() == 1 {
-            "frame"
+            "the frame has no second return"
         } else {
-            "no frame of the sequence"
+            "no frame of the sequence has a second return"
         };
         return Err(Error::Input(format!(
-            "{}: {what} has no second return; the dual-return detector needs dual-return data \
+            "{}: {what}; the dual-return detector needs dual-return data \
              (use [detector] name = \"intensity-peak\" for single-return scans)",
             sequence.path(index).display()
         )));

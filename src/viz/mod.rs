@@ -7,6 +7,7 @@
 //! | [`plots`] | `topdown.png`, `trajectory.png`, `metrics.png` |
 //! | [`report`] | `report.md` |
 
+pub mod corner;
 pub mod mcap;
 pub mod plots;
 pub mod report;

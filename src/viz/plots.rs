@@ -30,7 +30,7 @@ fn register_font() {
 }
 
 /// Draw into a temporary `*.tmp.png` next to `path` and rename it into place.
-fn render(
+pub(crate) fn render(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&DrawingArea<BitMapBackend<'_>, plotters::coord::Shift>) -> Result<()>,
@@ -53,14 +53,14 @@ fn render(
     }
 }
 
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+pub(crate) fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
     Error::Input(format!("{}: cannot draw the plot: {e}", path.display()))
 }
 
 /// Ranges covering `points` with a margin (at least `min_span` metres),
 /// stretched so one metre has the same length on both axes of a `w`×`h` plot
 /// area.
-fn equal_ranges(
+pub(crate) fn equal_ranges(
     points: impl Iterator<Item = [f64; 2]>,
     min_span: f64,
     w: f64,
@@ -87,13 +87,13 @@ fn equal_ranges(
     (cx - sx / 2.0..cx + sx / 2.0, cy - sy / 2.0..cy + sy / 2.0)
 }
 
-fn rgb(c: [u8; 3]) -> RGBColor {
+pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
 }
 
 /// The reflective extent of each plane as closed polylines (x, y): each
 /// pane, then the hull (drawn on top).
-fn plane_outlines(planes: &[BoundedPlane]) -> Vec<(bool, Vec<(f64, f64)>)> {
+pub(crate) fn plane_outlines(planes: &[BoundedPlane]) -> Vec<(bool, Vec<(f64, f64)>)> {
     let mut out = Vec::new();
     for bp in planes {
         let mut ring = |vs: Vec<nalgebra::Point3<f64>>, pane: bool| {
