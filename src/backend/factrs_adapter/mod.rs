@@ -210,6 +210,52 @@ pub fn converted_costs(
     Ok(out)
 }
 
+/// One converted factor linearised by factrs (autodiff), in factrs'
+/// conventions: pose columns in `(ω, v)` order, pose-factor residuals
+/// negated with respect to ours (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FactrsLinearization {
+    /// The free variables, in column-block order.
+    pub keys: Vec<Key>,
+    /// Whitened, robust-weighted residual `√ρ'(s) S r`.
+    pub residual: Vec<f64>,
+    /// Whitened, robust-weighted Jacobian, one `Vec` per row.
+    pub jacobian: Vec<Vec<f64>>,
+}
+
+/// Each converted factor's factrs linearisation at `values`, indexed like
+/// `graph.factors` (`None` for factors left out). For tests: it checks our
+/// analytic Jacobians against factrs' autodiff of independent code.
+pub fn converted_linearizations(
+    graph: &FactorGraph,
+    values: &Values,
+    fixed: &BTreeSet<Key>,
+) -> Result<Vec<Option<FactrsLinearization>>> {
+    use super::factors::Factor as _;
+    let problem = convert(graph, values, fixed)?;
+    let mut out = vec![None; graph.factors.len()];
+    for (k, &index) in problem.source.iter().enumerate() {
+        let f = problem.graph.at(k);
+        let lin = catch_unwind(AssertUnwindSafe(|| f.linearize(&problem.values)))
+            .map_err(|_| Error::Input(format!("factrs could not linearise factor {index}")))?;
+        let a = lin.a.mat();
+        out[index] = Some(FactrsLinearization {
+            keys: graph.factors[index]
+                .factor
+                .keys()
+                .iter()
+                .copied()
+                .filter(|key| !fixed.contains(key))
+                .collect(),
+            residual: lin.b.iter().map(|b| -b).collect(),
+            jacobian: (0..a.nrows())
+                .map(|r| (0..a.ncols()).map(|c| a[(r, c)]).collect())
+                .collect(),
+        });
+    }
+    Ok(out)
+}
+
 /// Add the factrs version of one factor; `false` if all its keys are fixed.
 fn add_factor(
     fgraph: &mut Graph,
