@@ -9,8 +9,8 @@
 use std::collections::BTreeSet;
 
 use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
-use specular::backend::factrs_adapter::{converted_costs, from_se3, to_se3, Factrs};
 use specular::backend::factors::Factor;
+use specular::backend::factrs_adapter::{converted_costs, from_se3, to_se3, Factrs};
 use specular::backend::synthetic::{synthetic, SyntheticParams};
 use specular::backend::{
     backend, gauss_newton, levenberg_marquardt, AnyFactor, Backend, BackendName, BackendParams,
@@ -70,7 +70,10 @@ fn same_minimum(g: &FactorGraph) {
         fr.initial_cost,
         lm.initial_cost
     );
-    assert!(fr.final_cost < 0.5 * fr.initial_cost, "factrs did not descend: {fr:?}");
+    assert!(
+        fr.final_cost < 0.5 * fr.initial_cost,
+        "factrs did not descend: {fr:?}"
+    );
     // The report's final cost is ours at the returned values.
     assert_eq!(fr.final_cost, g.cost(&fv).unwrap());
     eprintln!(
@@ -273,7 +276,11 @@ fn converted_jacobians_match_our_analytic_ones() {
         for (i, (f, t)) in g.factors.iter().zip(&theirs).enumerate() {
             let Some(t) = t else { continue };
             f.linearize(&v, &mut lin).unwrap();
-            let sign = if f.factor.is_plane_factor() { 1.0 } else { -1.0 };
+            let sign = if f.factor.is_plane_factor() {
+                1.0
+            } else {
+                -1.0
+            };
             assert_eq!(t.residual.len(), lin.dim, "factor {i}");
             let scale = 1.0 + lin.residual.amax();
             for r in 0..lin.dim {

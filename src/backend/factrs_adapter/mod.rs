@@ -37,7 +37,9 @@ use factrs::optimizers::{
 use factrs::residuals::{BetweenResidual, PriorResidual};
 use factrs::robust::{Cauchy, Huber};
 use factrs::variables::{SE3, SO3};
-use nalgebra::{Isometry3, Matrix3, Matrix6, Quaternion, SymmetricEigen, Translation3, UnitQuaternion};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix6, Quaternion, SymmetricEigen, Translation3, UnitQuaternion,
+};
 
 use super::backends::Backend;
 use super::factors::{AnyFactor, GraphFactor, PlaneObservation, PointToPlane};
@@ -160,7 +162,11 @@ pub struct FactrsProblem {
 /// Convert `graph` at `values` with the variables in `fixed` held constant.
 /// Factors whose variables are all fixed are left out (their cost is a
 /// constant); free variables no factor touches are not factrs variables.
-pub fn convert(graph: &FactorGraph, values: &Values, fixed: &BTreeSet<Key>) -> Result<FactrsProblem> {
+pub fn convert(
+    graph: &FactorGraph,
+    values: &Values,
+    fixed: &BTreeSet<Key>,
+) -> Result<FactrsProblem> {
     let mut fgraph = Graph::with_capacity(graph.factors.len());
     let mut source = Vec::with_capacity(graph.factors.len());
     let mut free = BTreeSet::new();
@@ -271,7 +277,11 @@ fn add_factor(
                 return Ok(false);
             }
             let res = PriorResidual::new(to_se3(&f.prior));
-            finish(FactorBuilder::<6>::new1(res, X(id)), pose_noise(&f.sqrt_info), kernel)
+            finish(
+                FactorBuilder::<6>::new1(res, X(id)),
+                pose_noise(&f.sqrt_info),
+                kernel,
+            )
         }
         AnyFactor::Between(f) => {
             let (i, j) = f.poses();
@@ -279,7 +289,11 @@ fn add_factor(
             let z = to_se3(&f.measured);
             match (fixed.contains(&Key::Pose(i)), fixed.contains(&Key::Pose(j))) {
                 (true, true) => return Ok(false),
-                (false, false) => finish(FactorBuilder::<6>::new2(BetweenResidual::new(z), X(i), X(j)), noise, kernel),
+                (false, false) => finish(
+                    FactorBuilder::<6>::new2(BetweenResidual::new(z), X(i), X(j)),
+                    noise,
+                    kernel,
+                ),
                 // log(X_j⁻¹ · (X_i Z)) is factrs' prior on X_j at X_i Z.
                 (true, false) => {
                     let xi_z = values.pose(i)? * f.measured;
@@ -298,7 +312,15 @@ fn add_factor(
         AnyFactor::PlaneObservation(f) => {
             let (pose, plane) = f.ids();
             let noise = GaussianNoise::<3>::from_matrix_sqrt_inf(mat3(&f.sqrt_info));
-            match plane_factor::<_, 3>(plane_to_plane(f), pose, plane, values, fixed, noise, kernel)? {
+            match plane_factor::<_, 3>(
+                plane_to_plane(f),
+                pose,
+                plane,
+                values,
+                fixed,
+                noise,
+                kernel,
+            )? {
                 Some(factor) => factor,
                 None => return Ok(false),
             }
@@ -306,7 +328,15 @@ fn add_factor(
         AnyFactor::PointToPlane(f) => {
             let (pose, plane) = f.ids();
             let noise = GaussianNoise::<4>::from_scalar_sigma(f.sigma);
-            match plane_factor::<_, 4>(point_to_plane(f)?, pose, plane, values, fixed, noise, kernel)? {
+            match plane_factor::<_, 4>(
+                point_to_plane(f)?,
+                pose,
+                plane,
+                values,
+                fixed,
+                noise,
+                kernel,
+            )? {
                 Some(factor) => factor,
                 None => return Ok(false),
             }
@@ -330,9 +360,16 @@ fn plane_factor<M, const N: usize>(
 where
     M: PlaneModel<DimOut = factrs::linalg::Const<N>>,
 {
-    let factor = match (fixed.contains(&Key::Pose(pose)), fixed.contains(&Key::Plane(plane))) {
+    let factor = match (
+        fixed.contains(&Key::Pose(pose)),
+        fixed.contains(&Key::Plane(plane)),
+    ) {
         (true, true) => return Ok(None),
-        (false, false) => finish(FactorBuilder::<N>::new2(PoseAndPlane { model }, X(pose), L(plane)), noise, kernel),
+        (false, false) => finish(
+            FactorBuilder::<N>::new2(PoseAndPlane { model }, X(pose), L(plane)),
+            noise,
+            kernel,
+        ),
         (true, false) => {
             let res = PlaneOnly {
                 model,
@@ -392,7 +429,9 @@ fn point_to_plane(f: &PointToPlane) -> Result<PointToPlaneModel> {
     let lt = Matrix3::from_diagonal(&eig.eigenvalues.map(|l| l.max(0.0).sqrt()))
         * eig.eigenvectors.transpose();
     if !lt.iter().all(|v| v.is_finite()) || !(f.count >= 1.0) {
-        return Err(Error::Input("point_to_plane: scatter or count is not usable".into()));
+        return Err(Error::Input(
+            "point_to_plane: scatter or count is not usable".into(),
+        ));
     }
     let c = f.centroid;
     Ok(PointToPlaneModel {
@@ -435,10 +474,15 @@ pub fn to_plane(p: &PlaneVar) -> FactrsPlane {
 /// degenerate normal.
 pub fn from_plane(p: &FactrsPlane) -> Result<PlaneVar> {
     if p.tangent {
-        return Err(Error::Input("factrs returned a plane update, not a plane".into()));
+        return Err(Error::Input(
+            "factrs returned a plane update, not a plane".into(),
+        ));
     }
-    PlaneVar::new(nalgebra::Vector3::new(p.normal.x, p.normal.y, p.normal.z), p.d)
-        .ok_or_else(|| Error::Input("factrs returned a degenerate plane".into()))
+    PlaneVar::new(
+        nalgebra::Vector3::new(p.normal.x, p.normal.y, p.normal.z),
+        p.d,
+    )
+    .ok_or_else(|| Error::Input("factrs returned a degenerate plane".into()))
 }
 
 /// `initial` with the free variables replaced by factrs' results.
@@ -483,7 +527,11 @@ impl Run {
 /// the values when it cannot step), with our stopping rules on factrs'
 /// cost (the same function as ours minus constant fully-fixed factors).
 /// A panic inside factrs (e.g. a failed Cholesky) becomes a typed error.
-fn iterate<O: Optimizer>(opt: &mut O, mut values: FValues, p: &SolverParams) -> Result<(FValues, Run)> {
+fn iterate<O: Optimizer>(
+    opt: &mut O,
+    mut values: FValues,
+    p: &SolverParams,
+) -> Result<(FValues, Run)> {
     let panicked = |what: &str| {
         Error::Input(format!(
             "factrs failed while {what} (singular or non-finite system?)"
@@ -520,7 +568,9 @@ fn iterate<O: Optimizer>(opt: &mut O, mut values: FValues, p: &SolverParams) -> 
         let new_cost = catch_unwind(AssertUnwindSafe(|| opt.error(&next)))
             .map_err(|_| panicked("evaluating the cost"))?;
         if !new_cost.is_finite() {
-            return Err(Error::Input(format!("factrs step {i} gave a non-finite cost")));
+            return Err(Error::Input(format!(
+                "factrs step {i} gave a non-finite cost"
+            )));
         }
         values = next;
         run.per_iteration.push(IterationStats {

@@ -105,10 +105,7 @@ impl<T: Numeric> FactrsPlane<T> {
 
     /// Our retraction `(Exp_n(B v), d + δd)` by the tangent element `t`.
     fn retract_by(&self, t: &Self) -> Self {
-        Self::new(
-            retract(&self.normal, t.normal.x, t.normal.y),
-            self.d + t.d,
-        )
+        Self::new(retract(&self.normal, t.normal.x, t.normal.y), self.d + t.d)
     }
 }
 

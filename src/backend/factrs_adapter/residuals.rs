@@ -17,10 +17,7 @@ use factrs::variables::{MatrixLieGroup, Variable, SE3};
 use super::plane::{c, local_coordinates, FactrsPlane};
 
 /// The landmark seen from the pose: `n_s = Rᵀ n_w`, `d_s = d_w + n_w·t`.
-pub(crate) fn sensor_plane<T: Numeric>(
-    pose: &SE3<T>,
-    plane: &FactrsPlane<T>,
-) -> (Vector3<T>, T) {
+pub(crate) fn sensor_plane<T: Numeric>(pose: &SE3<T>, plane: &FactrsPlane<T>) -> (Vector3<T>, T) {
     let n_s = pose.rot().inverse().apply(plane.normal.as_view());
     let t = pose.xyz();
     let d_s = plane.d + plane.normal.x * t[0] + plane.normal.y * t[1] + plane.normal.z * t[2];
@@ -50,7 +47,11 @@ impl PlaneModel for PlaneToPlaneModel {
     type DimOut = Const<3>;
     fn eval<T: Numeric>(&self, pose: &SE3<T>, plane: &FactrsPlane<T>) -> VectorX<T> {
         let (n_s, d_s) = sensor_plane(pose, plane);
-        let m = Vector3::new(c::<T>(self.normal[0]), c::<T>(self.normal[1]), c::<T>(self.normal[2]));
+        let m = Vector3::new(
+            c::<T>(self.normal[0]),
+            c::<T>(self.normal[1]),
+            c::<T>(self.normal[2]),
+        );
         let (l0, l1) = local_coordinates(&n_s, &m);
         VectorX::from_vec(vec![-l0, -l1, d_s - c::<T>(self.d)])
     }
@@ -72,7 +73,8 @@ impl PlaneModel for PointToPlaneModel {
     type DimOut = Const<4>;
     fn eval<T: Numeric>(&self, pose: &SE3<T>, plane: &FactrsPlane<T>) -> VectorX<T> {
         let (n, d_s) = sensor_plane(pose, plane);
-        let dot = |row: &[f64; 3]| n.x * c::<T>(row[0]) + n.y * c::<T>(row[1]) + n.z * c::<T>(row[2]);
+        let dot =
+            |row: &[f64; 3]| n.x * c::<T>(row[0]) + n.y * c::<T>(row[1]) + n.z * c::<T>(row[2]);
         let l = &self.sqrt_scatter_t;
         VectorX::from_vec(vec![
             (dot(&self.centroid) + d_s) * c::<T>(self.sqrt_count),
