@@ -10,7 +10,7 @@ use std::collections::BTreeSet;
 
 use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
 use specular::backend::factors::Factor;
-use specular::backend::factrs_adapter::{converted_costs, from_se3, to_se3, Factrs};
+use specular::backend::factrs_adapter::{converted_costs, from_se3, to_se3, Factrs, FactrsMethod};
 use specular::backend::synthetic::{synthetic, SyntheticParams};
 use specular::backend::{
     backend, gauss_newton, levenberg_marquardt, AnyFactor, Backend, BackendName, BackendParams,
@@ -86,7 +86,17 @@ fn same_minimum(g: &FactorGraph) {
         gn.final_cost,
         gn.iterations
     );
-    for (name, other) in [("lm", lm.final_cost), ("gn", gn.final_cost)] {
+    let (_, fgn) = Factrs {
+        params: p,
+        method: FactrsMethod::GaussNewton,
+    }
+    .optimize(g, &init)
+    .unwrap();
+    for (name, other) in [
+        ("lm", lm.final_cost),
+        ("gn", gn.final_cost),
+        ("factrs gn", fgn.final_cost),
+    ] {
         let rel = (fr.final_cost - other).abs() / other;
         assert!(
             rel < 1e-4,
@@ -326,4 +336,14 @@ fn converted_jacobians_match_our_analytic_ones() {
         }
     }
     assert!(checked.iter().all(|&n| n > 0), "kinds checked: {checked:?}");
+}
+
+#[test]
+fn nothing_free_returns_the_initial_values() {
+    let mut g = graph(PlaneFactorKind::PlaneToPlane, 11);
+    g.fixed = g.values.keys().collect();
+    let (v, r) = Factrs::default().optimize(&g, &g.values).unwrap();
+    assert_eq!(v, g.values);
+    assert_eq!(r.iterations, 0);
+    assert_eq!(r.final_cost, r.initial_cost);
 }

@@ -42,7 +42,7 @@ use nalgebra::{
 };
 
 use super::backends::Backend;
-use super::factors::{AnyFactor, GraphFactor, PlaneObservation, PointToPlane};
+use super::factors::{AnyFactor, Factor as _, GraphFactor, PlaneObservation, PointToPlane};
 use super::graph::FactorGraph;
 use super::observability;
 use super::robust::RobustKernel;
@@ -174,7 +174,6 @@ pub fn convert(
         let added = add_factor(&mut fgraph, gf, values, fixed)?;
         if added {
             source.push(index);
-            use super::factors::Factor as _;
             free.extend(gf.factor.keys().iter().filter(|k| !fixed.contains(k)));
         }
     }
@@ -237,7 +236,6 @@ pub fn converted_linearizations(
     values: &Values,
     fixed: &BTreeSet<Key>,
 ) -> Result<Vec<Option<FactrsLinearization>>> {
-    use super::factors::Factor as _;
     let problem = convert(graph, values, fixed)?;
     let mut out = vec![None; graph.factors.len()];
     for (k, &index) in problem.source.iter().enumerate() {
@@ -513,12 +511,12 @@ struct Run {
 }
 
 impl Run {
-    /// Nothing to optimise.
+    /// Nothing to optimise (every variable fixed or untouched).
     fn empty() -> Self {
         Self {
             per_iteration: Vec::new(),
             converged: true,
-            termination: Termination::ZeroCost,
+            termination: Termination::NotIterative,
         }
     }
 }
