@@ -181,6 +181,27 @@ proptest! {
         }
     }
 
+    #[test]
+    fn unit3_error_vector_jacobian_matches_differences(p in unit(), q in unit()) {
+        prop_assume!(clear_axis(&p));
+        let (e, jac) = unit3::error_vector_with_jacobian(&p, &q);
+        // Bᵀ q: norm sin θ.
+        let sin = p.cross(&q).norm();
+        prop_assert!((e.norm() - sin).abs() < 1e-12);
+        let b = unit3::basis(&p);
+        let h = 1e-6;
+        for i in 0..2 {
+            let mut d = Vector2::zeros();
+            d[i] = h;
+            let ep = unit3::error_vector_with_jacobian(&unit3::retract(&p, &d), &q).0;
+            let em = unit3::error_vector_with_jacobian(&unit3::retract(&p, &-d), &q).0;
+            let numeric = (ep - em) / (2.0 * h);
+            let analytic = jac * b.column(i);
+            prop_assert!((analytic - numeric).norm() < 1e-6 * (1.0 + numeric.norm()),
+                "dir {i}: {analytic} vs {numeric}");
+        }
+    }
+
     // -------------------------------------------------------------- factors
 
     #[test]
@@ -283,4 +304,35 @@ fn plane_observation_matches_gtsam_error_at_a_hand_computed_case() {
     let r = f.evaluate(&values_with(&[x], &[p]), None).unwrap();
     assert!((r[2] - 0.1).abs() < 1e-12 && r.rows(0, 2).norm() < 1e-12);
     assert_eq!(f.keys(), &[Key::Pose(0), Key::Plane(0)]);
+}
+
+/// Golden values from GTSAM 4.3 (Python wheel): `OrientedPlane3Factor`
+/// `unwhitenedError` and `error` for one pose, landmark, measurement and a
+/// non-diagonal square-root information (script in docs/backend.md).
+#[test]
+fn plane_observation_matches_gtsam_golden_values() {
+    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        0.8847830922830212,
+        0.144193646261696,
+        -0.09612909750779734,
+        0.432580938785088,
+    ));
+    let x = Isometry3::from_parts(Translation3::new(1.5, -2.0, 0.7), q);
+    let landmark = PlaneVar::new(Vector3::new(0.6, -0.48, 0.64), 12.0).unwrap();
+    let meas = Plane {
+        normal: Vector3::new(0.1, 0.8, 0.3).normalize(),
+        d: 9.5,
+    };
+    let values = values_with(&[x], &[landmark]);
+    let plain = PlaneObservation::new(0, 0, meas, Matrix3::identity());
+    let r = plain.evaluate(&values, None).unwrap();
+    let gtsam = Vector3::new(0.9291013824427279, -0.18376934688875182, 4.808);
+    assert!(
+        (r.fixed_rows::<3>(0) - gtsam).norm() < 1e-12,
+        "{r} vs {gtsam}"
+    );
+    let s = Matrix3::new(10.0, 1.0, 0.0, 0.0, 20.0, 2.0, 0.0, 0.0, 5.0);
+    let f = PlaneObservation::new(0, 0, meas, s);
+    let cost = 0.5 * f.evaluate(&values, None).unwrap().norm_squared();
+    assert!((cost - 348.07719276436694).abs() < 1e-9, "{cost}");
 }

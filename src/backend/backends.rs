@@ -161,6 +161,12 @@ impl BackendParams {
                 )));
             }
         }
+        if !(s.lambda_decrease > 0.0 && s.lambda_decrease < 1.0) {
+            return Err(Error::Config(format!(
+                "backend.solver.lambda_decrease must be in (0, 1), got {}",
+                s.lambda_decrease
+            )));
+        }
         Ok(())
     }
 }

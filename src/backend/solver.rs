@@ -5,9 +5,15 @@
 //! Gauss–Newton takes every step (as GTSAM's `GaussNewtonOptimizer`);
 //! a non-positive pivot is a typed error naming the problem.
 //! Levenberg–Marquardt damps with `λ·diag(H)`, accepts a step when the gain
-//! ratio `ϱ = (F − F_new) / (½ δᵀ(λ D δ − g)) > 0` and updates `λ` with
-//! Nielsen's rule (`λ ← λ·max(⅓, 1 − (2ϱ − 1)³)`, `ν = 2` on success;
-//! `λ ← λν`, `ν ← 2ν` on failure or on a non-positive pivot).
+//! ratio `ϱ = (F − F_new) / (½ δᵀ(λ D δ − g)) > 0`; on failure (or a
+//! non-positive pivot) Nielsen's increase `λ ← λν`, `ν ← 2ν`; on success
+//! `λ ← λ · lambda_decrease` (0.1, GTSAM's factor) and `ν = 2`.
+//!
+//! Nielsen's success rule `λ ← λ·max(⅓, 1 − (2ϱ − 1)³)` was the first
+//! choice and is not used: on the 10,000-pose synthetic graph the gain ratio
+//! settles near ½, where that rule leaves `λ` unchanged, and the solve
+//! crawled (22 iterations, stopped 9 above the optimum, 8 s) while the
+//! constant decrease reaches the optimum in 10 iterations (5 s).
 
 use std::time::Instant;
 
@@ -36,6 +42,8 @@ pub struct SolverParams {
     pub initial_lambda: f64,
     /// Give up when `λ` exceeds this (no descent found).
     pub max_lambda: f64,
+    /// Factor applied to `λ` after an accepted step (in `(0, 1)`).
+    pub lambda_decrease: f64,
     /// Relative eigenvalue threshold of the observability report.
     pub unobservable_threshold: f64,
 }
@@ -47,8 +55,9 @@ impl Default for SolverParams {
             relative_tolerance: 1e-5,
             absolute_tolerance: 1e-5,
             step_tolerance: 1e-10,
-            initial_lambda: 1e-5,
+            initial_lambda: 1e-8,
             max_lambda: 1e10,
+            lambda_decrease: 0.1,
             unobservable_threshold: 1e-6,
         }
     }
@@ -317,7 +326,7 @@ fn run(
                     cost = sys.assemble(graph, &values)?;
                     assembly_seconds = sys.timings.assembly;
                     totals.assembly += assembly_seconds;
-                    lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+                    lambda *= params.lambda_decrease;
                     nu = 2.0;
                     stats.push(IterationStats {
                         iteration,

@@ -111,6 +111,25 @@ pub fn local_coordinates_with_jacobian(
     (value, jac)
 }
 
+/// GTSAM's `Unit3::errorVector`: `Bᵀ(p) q`, the tangent-plane projection of
+/// `q` at `p` (norm `sin θ`), and its Jacobian with respect to `p` as a
+/// 3-vector: `∂(b_kᵀ q)/∂p = qᵀ ∂b_k/∂p` (the basis derivatives of
+/// [`local_coordinates_with_jacobian`]). This, not `localCoordinates`, is the
+/// normal residual of GTSAM's `OrientedPlane3Factor`.
+pub fn error_vector_with_jacobian(
+    p: &Vector3<f64>,
+    q: &Vector3<f64>,
+) -> (Vector2<f64>, Matrix2x3<f64>) {
+    let (b1, a, b1_norm) = basis_first(p);
+    let b2 = p.cross(&b1);
+    let db1 = (Matrix3::identity() - b1 * b1.transpose()) * (-hat(&a)) / b1_norm;
+    let db2 = -hat(&b1) + hat(p) * db1;
+    let mut jac = Matrix2x3::zeros();
+    jac.row_mut(0).copy_from(&(q.transpose() * db1));
+    jac.row_mut(1).copy_from(&(q.transpose() * db2));
+    (Vector2::new(b1.dot(q), b2.dot(q)), jac)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -5,6 +5,7 @@ mod convert;
 mod demo;
 mod detect;
 mod eval;
+mod graph;
 mod simulate;
 mod slam;
 mod visual;
@@ -45,6 +46,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Simulate a dual-return LiDAR sequence with glass and mirrors.
     Simulate(simulate::SimulateArgs),
+    /// Pose-plane factor graphs: export synthetic ones, solve graph files.
+    Graph(graph::GraphArgs),
     /// Print the effective configuration as TOML (every key with its value).
     Config {
         /// Built-in name (default, paper) or path to a TOML file.
@@ -88,6 +91,7 @@ pub fn run() -> Result<()> {
         Command::Demo(args) => demo::run(args),
         Command::Convert(args) => convert::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Graph(args) => graph::run(args),
         Command::Config { config } => {
             print!("{}", load_config(&config)?.to_toml());
             Ok(())

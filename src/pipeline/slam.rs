@@ -121,6 +121,10 @@ pub fn run_slam(
         rejector(config),
         merger(config),
         origin.unwrap_or_else(Isometry3::identity),
+    )
+    .with_window(
+        backend(config.backend.name, &config.backend)?,
+        config.backend,
     );
     let mut poses = Vec::with_capacity(sequence.len());
     let mut reports = Vec::with_capacity(sequence.len());
@@ -147,6 +151,8 @@ pub fn run_slam(
     );
     // 3. Back-end: the whole pose-plane graph at once.
     let (mut map, log) = tracker.into_parts();
+    // Tracking's poses as the sliding window left them.
+    let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
     let start = Instant::now();
     let graph = tracking_graph(&log, &map, &config.backend)?;
     let (optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;

@@ -14,14 +14,15 @@
 //! The first pose is fixed (the graph's automatic gauge): it defines the
 //! world frame exactly as tracking did.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Vector6};
 
-use super::log::TrackingLog;
+use super::log::{LandmarkObservation, TrackingLog};
 use crate::backend::{
-    AnyFactor, BackendParams, Between, FactorGraph, GraphFactor, PlaneFactorKind, PlaneObservation,
-    PlaneVar, PointToPlane, RobustKernel, Values,
+    AnyFactor, BackendParams, Between, FactorGraph, GraphFactor, Key, PlaneFactorKind,
+    PlaneObservation, PlaneVar, PointToPlane, RobustKernel, Values,
 };
 use crate::map::PlaneMap;
 use crate::Result;
@@ -36,24 +37,53 @@ pub fn tracking_graph(
     map: &PlaneMap,
     params: &BackendParams,
 ) -> Result<FactorGraph> {
+    window_graph(log, 0..log.frames.len(), map, params)
+}
+
+/// The graph of the frames `frames` of a tracking run (pose ids are frame
+/// indices; the window's first pose is the gauge), with the landmarks they
+/// observe.
+pub fn window_graph(
+    log: &TrackingLog,
+    frames: Range<usize>,
+    map: &PlaneMap,
+    params: &BackendParams,
+) -> Result<FactorGraph> {
+    let frames = frames.start..frames.end.min(log.frames.len());
     let mut graph = FactorGraph::new();
-    for (k, f) in log.frames.iter().enumerate() {
-        graph.values.poses.insert(k as u32, f.pose);
+    for k in frames.clone() {
+        graph.values.poses.insert(k as u32, log.frames[k].pose);
     }
+    // The log is in frame order: the window's observations are one slice.
+    let lo = log.observations.partition_point(|o| o.frame < frames.start);
+    let hi = log.observations.partition_point(|o| o.frame < frames.end);
+    let observations: &[LandmarkObservation] = &log.observations[lo..hi.max(lo)];
+    let seen: BTreeSet<usize> = observations.iter().map(|o| o.landmark).collect();
     let planes: BTreeMap<usize, PlaneVar> = map
         .landmarks
         .iter()
+        .filter(|l| seen.contains(&l.id))
         .map(|l| (l.id, PlaneVar::from(l.plane)))
         .collect();
     for (&id, &p) in &planes {
         graph.values.planes.insert(id as u32, p);
+    }
+    // Landmarks seen before the window carry the evidence of frames the
+    // window does not hold: they stay where that evidence put them (a
+    // window free to move them would forget it).
+    if frames.start > 0 {
+        for l in map.landmarks.iter().filter(|l| planes.contains_key(&l.id)) {
+            if l.first_frame < frames.start {
+                graph.fixed.insert(Key::Plane(l.id as u32));
+            }
+        }
     }
 
     let odometry_info = diagonal_sqrt_info(
         params.odometry_translation_sigma,
         params.odometry_rotation_sigma,
     );
-    for k in 1..log.frames.len() {
+    for k in frames.start + 1..frames.end {
         let (measured, info) = match log.frames[k].odometry {
             Some(rel) => (rel, odometry_info),
             None => (
@@ -74,8 +104,8 @@ pub fn tracking_graph(
         1.0 / params.plane_normal_sigma,
         1.0 / params.plane_offset_sigma,
     ));
-    for obs in &log.observations {
-        if !planes.contains_key(&obs.landmark) || obs.frame >= log.frames.len() {
+    for obs in observations {
+        if !planes.contains_key(&obs.landmark) {
             continue;
         }
         let (x, l) = (obs.frame as u32, obs.landmark as u32);
@@ -92,22 +122,36 @@ pub fn tracking_graph(
                 params.point_sigma,
             )?),
         };
-        let robust = match (params.plane_factor, params.robust) {
-            // The scatter factor's whitened norm grows with √N even for a
-            // perfect fit; the kernel's threshold is scaled to match.
-            (PlaneFactorKind::PointToPlane, RobustKernel::Huber { k }) => RobustKernel::Huber {
-                k: k * (obs.count as f64).sqrt(),
-            },
-            (PlaneFactorKind::PointToPlane, RobustKernel::Cauchy { k }) => RobustKernel::Cauchy {
-                k: k * (obs.count as f64).sqrt(),
-            },
-            (_, kernel) => kernel,
+        let robust = match params.plane_factor {
+            PlaneFactorKind::PlaneToPlane => params.robust,
+            PlaneFactorKind::PointToPlane => scatter_kernel(params, obs),
         };
         graph
             .factors
             .push(GraphFactor::new(factor).with_robust(robust));
     }
     Ok(graph)
+}
+
+/// The robust kernel of a point-to-plane factor. Its whitened norm is
+/// `√N · rms / σ` for a correct association (`rms` the inliers' distance to
+/// their own plane), not about 1 as for a plane-to-plane factor, so the
+/// kernel's threshold is scaled by it: an association is down-weighted once
+/// the landmark lies farther from the inliers than `k` times their own
+/// scatter (with a 1 cm floor on the rms).
+fn scatter_kernel(params: &BackendParams, obs: &LandmarkObservation) -> RobustKernel {
+    let n = obs.count.max(1) as f64;
+    let lambda_min = nalgebra::SymmetricEigen::new(obs.scatter)
+        .eigenvalues
+        .min()
+        .max(0.0);
+    let rms = (lambda_min / n).sqrt().max(0.01);
+    let scale = n.sqrt() * rms / params.point_sigma;
+    match params.robust {
+        RobustKernel::Huber { k } => RobustKernel::Huber { k: k * scale },
+        RobustKernel::Cauchy { k } => RobustKernel::Cauchy { k: k * scale },
+        other => other,
+    }
 }
 
 /// Square-root information of independent translation and rotation noise

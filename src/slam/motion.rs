@@ -90,6 +90,14 @@ impl MotionModel {
         }
     }
 
+    /// Replace the last recorded pose (a back-end moved it), keeping the
+    /// velocity.
+    pub fn correct(&mut self, pose: Isometry3<f64>) {
+        if self.last.is_some() {
+            self.last = Some(pose);
+        }
+    }
+
     /// Record the pose of the frame just tracked. The first measured
     /// relative motion is taken as is; later ones move the velocity by at
     /// most the configured change.

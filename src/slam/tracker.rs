@@ -5,8 +5,10 @@ use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
+use super::graph::{update_map, window_graph};
 use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
 use super::motion::{MotionModel, MotionParams};
+use crate::backend::{Backend, BackendParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
 use crate::map::{MapMerger, PlaneMap};
@@ -40,6 +42,12 @@ pub struct SlamParams {
     pub prune_min_observations: usize,
     /// Segment length of the relative pose error, m.
     pub rpe_segment: f64,
+    /// Frames in the sliding window optimised during tracking by the
+    /// back-end (0 or 1: no window; the batch optimisation at the end runs
+    /// regardless).
+    pub window: usize,
+    /// The window is optimised after every this many frames.
+    pub window_every: usize,
 }
 
 impl FrameReport {
@@ -67,6 +75,8 @@ impl Default for SlamParams {
             prune_after: 30,
             prune_min_observations: 3,
             rpe_segment: 1.0,
+            window: 0,
+            window_every: 5,
         }
     }
 }
@@ -118,6 +128,7 @@ pub struct Tracker {
     frames: usize,
     origin: Isometry3<f64>,
     log: TrackingLog,
+    window: Option<(Box<dyn Backend>, BackendParams)>,
 }
 
 impl Tracker {
@@ -139,7 +150,15 @@ impl Tracker {
             frames: 0,
             origin,
             log: TrackingLog::default(),
+            window: None,
         }
+    }
+
+    /// Optimise a sliding window of the last [`SlamParams::window`] frames
+    /// with `backend` during tracking.
+    pub fn with_window(mut self, backend: Box<dyn Backend>, params: BackendParams) -> Self {
+        self.window = Some((backend, params));
+        self
     }
 
     /// The map so far.
@@ -273,7 +292,51 @@ impl Tracker {
         self.motion.update(pose);
         self.previous = Some((usable, pose));
         report.pose = pose;
+        if p.window >= 2 && p.window_every >= 1 && (index + 1) % p.window_every == 0 {
+            if let Some(corrected) = self.optimize_window(index) {
+                report.pose = corrected;
+            }
+        }
         report
+    }
+
+    /// Optimise the frames `index + 1 - window ..= index` (the oldest one
+    /// fixed) with the landmarks they observe; the log's poses, the map's
+    /// planes, the previous pose and the motion model take the result.
+    /// Returns the corrected pose of frame `index`; `None` (nothing changed)
+    /// when there is no window back-end or it fails — tracking goes on.
+    fn optimize_window(&mut self, index: usize) -> Option<Isometry3<f64>> {
+        let (solver, params) = self.window.as_ref()?;
+        let start = (index + 1).saturating_sub(self.params.window);
+        let graph = window_graph(&self.log, start..index + 1, &self.map, params).ok()?;
+        let values = match solver.optimize(&graph, &graph.values) {
+            Ok((values, report)) => {
+                tracing::debug!(
+                    frame = index,
+                    iterations = report.iterations,
+                    seconds = report.total_seconds,
+                    setup = report.setup_seconds,
+                    "window"
+                );
+                values
+            }
+            Err(e) => {
+                tracing::debug!(frame = index, "window optimisation failed: {e}");
+                return None;
+            }
+        };
+        for (&k, pose) in &values.poses {
+            if let Some(f) = self.log.frames.get_mut(k as usize) {
+                f.pose = *pose;
+            }
+        }
+        update_map(&mut self.map, &values);
+        let pose = self.log.frames.get(index)?.pose;
+        self.motion.correct(pose);
+        if let Some((_, previous)) = &mut self.previous {
+            *previous = pose;
+        }
+        Some(pose)
     }
 
     /// Log that `plane` of frame `frame` was fused into the landmark at

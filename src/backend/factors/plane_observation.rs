@@ -3,11 +3,16 @@
 //! The landmark is predicted in the sensor frame (`n_s = Rᵀ n_w`,
 //! `d_s = d_w + n_w·t`, see `sensor_plane`) and compared with the measured
 //! sensor-frame plane `(m, d_m)`:
-//! `r = (−n_s.localCoordinates(m), d_s − d_m)` (3-D). This is the paper's
-//! plane-to-plane residual on the minimal S² × ℝ parametrisation; with an
-//! isotropic normal noise its cost equals GTSAM's exactly. Jacobians: the
-//! chain rule through `unit3::local_coordinates_with_jacobian` (which
-//! differentiates GTSAM's basis as well) and the sensor-plane Jacobians.
+//! `r = (B(n_s)ᵀ m, d_s − d_m)` (3-D), `B` the `Unit3` tangent basis. This
+//! is the paper's plane-to-plane residual on the minimal S² × ℝ
+//! parametrisation and exactly what GTSAM 4.3's `OrientedPlane3Factor`
+//! evaluates (`OrientedPlane3::errorVector` → `Unit3::errorVector`, the
+//! projection of `m` on the tangent plane, norm `sin θ`; *not*
+//! `−localCoordinates`, norm `θ`, as some notes say): costs agree with GTSAM
+//! to round-off for any 3×3 noise model, checked with
+//! `paper/gtsam_solve.py`. Jacobians: the chain rule through
+//! `unit3::error_vector_with_jacobian` (which differentiates GTSAM's basis)
+//! and the sensor-plane Jacobians.
 
 use nalgebra::{Matrix3, Matrix6, Vector6};
 
@@ -64,17 +69,16 @@ impl Factor for PlaneObservation {
         let pose = values.pose(self.ids[0])?;
         let plane = values.plane(self.ids[1])?;
         let sp = sensor_plane(pose, plane);
-        let (local, dlocal) =
-            unit3::local_coordinates_with_jacobian(&sp.normal, &self.measured.normal);
-        let r = nalgebra::Vector3::new(-local.x, -local.y, sp.d - self.measured.d);
+        let (e, de) = unit3::error_vector_with_jacobian(&sp.normal, &self.measured.normal);
+        let r = nalgebra::Vector3::new(e.x, e.y, sp.d - self.measured.d);
         if let Some(j) = jacobians {
             let mut jp = nalgebra::Matrix3x6::zeros();
             jp.fixed_view_mut::<2, 6>(0, 0)
-                .copy_from(&(-(dlocal * sp.dn_dpose)));
+                .copy_from(&(de * sp.dn_dpose));
             jp.fixed_view_mut::<1, 6>(2, 0).copy_from(&sp.dd_dpose);
             let mut jl = Matrix3::zeros();
             jl.fixed_view_mut::<2, 3>(0, 0)
-                .copy_from(&(-(dlocal * sp.dn_dplane)));
+                .copy_from(&(de * sp.dn_dplane));
             jl.fixed_view_mut::<1, 3>(2, 0).copy_from(&sp.dd_dplane);
             j[0].fill(0.0);
             j[1].fill(0.0);

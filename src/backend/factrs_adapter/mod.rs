@@ -76,9 +76,10 @@ pub enum FactrsMethod {
 /// The factrs back-end.
 #[derive(Debug, Clone, Default)]
 pub struct Factrs {
-    /// Iteration limit, tolerances and `max_lambda` (factrs' initial λ is
-    /// fixed at 1e-10 and its update factor at 10; `initial_lambda` and
-    /// `step_tolerance` do not map).
+    /// Iteration limit, tolerances, `max_lambda` and `lambda_decrease`
+    /// (factrs' λ factor is `1 / lambda_decrease`, used both ways; its
+    /// initial λ is fixed at 1e-10, so `initial_lambda` and `step_tolerance`
+    /// do not map).
     pub params: SolverParams,
     /// The optimiser.
     pub method: FactrsMethod,
@@ -110,6 +111,9 @@ impl Backend for Factrs {
                 FactrsMethod::LevenbergMarquardt => {
                     let params = LevenParams {
                         lambda_max: p.max_lambda,
+                        // factrs divides λ by this after a success and
+                        // multiplies by it after a failure.
+                        lambda_factor: 1.0 / p.lambda_decrease,
                         base,
                         ..LevenParams::default()
                     };
