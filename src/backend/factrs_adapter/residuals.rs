@@ -14,7 +14,7 @@ use factrs::linalg::{Const, DimName, ForwardProp, Numeric, Vector3, VectorX};
 use factrs::residuals::{Residual1, Residual2};
 use factrs::variables::{MatrixLieGroup, Variable, SE3};
 
-use super::plane::{c, local_coordinates, FactrsPlane};
+use super::plane::{basis, c, FactrsPlane};
 
 /// The landmark seen from the pose: `n_s = Rᵀ n_w`, `d_s = d_w + n_w·t`.
 pub(crate) fn sensor_plane<T: Numeric>(pose: &SE3<T>, plane: &FactrsPlane<T>) -> (Vector3<T>, T) {
@@ -32,9 +32,11 @@ pub trait PlaneModel: Clone + Debug + 'static {
     fn eval<T: Numeric>(&self, pose: &SE3<T>, plane: &FactrsPlane<T>) -> VectorX<T>;
 }
 
-/// GTSAM `OrientedPlane3Factor`: `r = (−n_s.localCoordinates(m), d_s − d_m)`
-/// for the measured sensor-frame plane `(m, d_m)` (whitened by the factor's
-/// 3×3 square-root information).
+/// GTSAM 4.3 `OrientedPlane3Factor` as our `PlaneObservation`:
+/// `r = (B(n_s)ᵀ m, d_s − d_m)` (`Unit3::errorVector`, the projection of the
+/// measured normal `m` on the predicted normal's tangent basis) for the
+/// measured sensor-frame plane `(m, d_m)`, whitened by the factor's 3×3
+/// square-root information.
 #[derive(Clone, Debug)]
 pub struct PlaneToPlaneModel {
     /// Measured sensor-frame unit normal.
@@ -52,8 +54,8 @@ impl PlaneModel for PlaneToPlaneModel {
             c::<T>(self.normal[1]),
             c::<T>(self.normal[2]),
         );
-        let (l0, l1) = local_coordinates(&n_s, &m);
-        VectorX::from_vec(vec![-l0, -l1, d_s - c::<T>(self.d)])
+        let (b1, b2) = basis(&n_s);
+        VectorX::from_vec(vec![b1.dot(&m), b2.dot(&m), d_s - c::<T>(self.d)])
     }
 }
 
