@@ -29,7 +29,7 @@ pub enum BackendName {
     Gn,
     /// Sparse Levenberg–Marquardt on faer.
     Lm,
-    /// The factrs crate (behind the `factrs` cargo feature, not built yet).
+    /// The factrs crate (behind the `factrs` cargo feature).
     Factrs,
 }
 
@@ -238,9 +238,15 @@ pub fn backend(name: BackendName, params: &BackendParams) -> Result<Box<dyn Back
             },
             params: params.solver,
         })),
+        #[cfg(feature = "factrs")]
+        BackendName::Factrs => Ok(Box::new(super::factrs_adapter::Factrs {
+            params: params.solver,
+            method: super::factrs_adapter::FactrsMethod::LevenbergMarquardt,
+        })),
+        #[cfg(not(feature = "factrs"))]
         BackendName::Factrs => Err(Error::Config(
-            "back-end 'factrs' is not available in this build: it needs the `factrs` cargo \
-             feature (not yet implemented); use gn, lm or average"
+            "back-end 'factrs' is not available in this build: build with --features factrs \
+             (or use gn, lm or average)"
                 .into(),
         )),
     }

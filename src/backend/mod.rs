@@ -15,6 +15,7 @@
 //! | [`observability`] | per-pose directions the planes leave unconstrained |
 //! | [`dense`] | dense reference Gauss–Newton (tests, tiny graphs) |
 //! | [`average`] | the paper's weighted plane average |
+//! | `factrs_adapter` | the external factrs back-end (cargo feature `factrs`) |
 //! | [`backends`] | the [`Backend`] trait, [`BackendName`], [`BackendParams`], [`backend`] |
 //! | [`synthetic`] | deterministic synthetic graphs |
 //!
@@ -26,6 +27,8 @@ pub mod average;
 pub mod backends;
 pub mod dense;
 pub mod factors;
+#[cfg(feature = "factrs")]
+pub mod factrs_adapter;
 pub mod format;
 pub mod graph;
 pub mod linear;

@@ -80,7 +80,7 @@ enum BackendArg {
     Gn,
     /// Sparse Levenberg-Marquardt.
     Lm,
-    /// factrs (not built yet: a clear error).
+    /// factrs 0.3 (needs a build with --features factrs; otherwise a clear error).
     Factrs,
 }
 
