@@ -6,7 +6,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::plots::{equal_ranges, plane_outlines, plot_err, render, rgb};
+use super::plots::{equal_ranges, plane_outlines, plot_err, render, rgb, trajectory_and_legend};
 use crate::classify::Class;
 use crate::io::map_ply::class_colour;
 use crate::io::MapPoint;
@@ -100,26 +100,7 @@ pub fn around_corner_png(
                     });
                 }
             }
-            if !trajectory.is_empty() {
-                chart
-                    .draw_series(LineSeries::new(
-                        trajectory.iter().map(|p| (p[0], p[1])),
-                        BLACK.stroke_width(2),
-                    ))
-                    .map_err(|e| plot_err(path, e))?
-                    .label("trajectory")
-                    .legend(|(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2))
-                    });
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 16))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(|e| plot_err(path, e))?;
+            trajectory_and_legend(&mut chart, trajectory, 16, path)?;
         }
         Ok(())
     })

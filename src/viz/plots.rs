@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
@@ -193,26 +194,7 @@ pub fn topdown_png(
                     });
             }
         }
-        if !trajectory.is_empty() {
-            chart
-                .draw_series(LineSeries::new(
-                    trajectory.iter().map(|p| (p[0], p[1])),
-                    BLACK.stroke_width(2),
-                ))
-                .map_err(|e| plot_err(path, e))?
-                .label("trajectory")
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2))
-                });
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 18))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| plot_err(path, e))
+        trajectory_and_legend(&mut chart, trajectory, 18, path)
     })
 }
 
@@ -362,4 +344,35 @@ pub fn metrics_png(path: &Path, metrics: &Metrics) -> Result<()> {
             .draw()
             .map_err(|e| plot_err(path, e))
     })
+}
+
+/// The top-view charts' last layers: the trajectory as a black line (when
+/// any) and the legend, upper right, with labels of `font` pixels.
+pub(crate) fn trajectory_and_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    trajectory: &[[f64; 2]],
+    font: u32,
+    path: &Path,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    if !trajectory.is_empty() {
+        chart
+            .draw_series(LineSeries::new(
+                trajectory.iter().map(|p| (p[0], p[1])),
+                BLACK.stroke_width(2),
+            ))
+            .map_err(|e| plot_err(path, e))?
+            .label("trajectory")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", font))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| plot_err(path, e))
 }
