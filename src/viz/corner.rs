@@ -6,7 +6,20 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::plots::{equal_ranges, plane_outlines, plot_err, render, rgb, trajectory_and_legend};
+use super::plots::{
+    equal_ranges, plane_outlines, plot_err, render, rgb, top_view_chart, trajectory_and_legend,
+    TopView,
+};
+
+/// Sizes of the figure's two panels.
+const PANEL: TopView = TopView {
+    caption: 24,
+    margin: 12,
+    y_label_area: 50,
+    labels: 15,
+    axis_desc: 16,
+    light_grid: false,
+};
 use crate::classify::Class;
 use crate::io::map_ply::class_colour;
 use crate::io::MapPoint;
@@ -47,22 +60,7 @@ pub fn around_corner_png(
     ];
     render(path, (w, h), |root| {
         for (area, (title, points)) in root.split_evenly((1, 2)).iter().zip(panels) {
-            let mut chart = ChartBuilder::on(area)
-                .caption(title, ("sans-serif", 24))
-                .margin(12)
-                .x_label_area_size(40)
-                .y_label_area_size(50)
-                .build_cartesian_2d(xr.clone(), yr.clone())
-                .map_err(|e| plot_err(path, e))?;
-            chart
-                .configure_mesh()
-                .x_desc("x [m]")
-                .y_desc("y [m]")
-                .label_style(("sans-serif", 15))
-                .axis_desc_style(("sans-serif", 16))
-                .light_line_style(WHITE.mix(0.0))
-                .draw()
-                .map_err(|e| plot_err(path, e))?;
+            let mut chart = top_view_chart(area, title, (xr.clone(), yr.clone()), &PANEL, path)?;
             let step = points.len().div_ceil(MAX_POINTS).max(1);
             for (class, mirrored, name, size) in [
                 (Class::Normal, false, "normal", 1),

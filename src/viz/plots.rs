@@ -135,22 +135,13 @@ pub fn topdown_png(
         f64::from(h - 110),
     );
     render(path, (w, h), |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption("Classified map, top-down (world frame)", ("sans-serif", 28))
-            .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(55)
-            .build_cartesian_2d(xr, yr)
-            .map_err(|e| plot_err(path, e))?;
-        chart
-            .configure_mesh()
-            .x_desc("x [m]")
-            .y_desc("y [m]")
-            .label_style(("sans-serif", 16))
-            .axis_desc_style(("sans-serif", 18))
-            .light_line_style(WHITE.mix(0.0))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
+        let mut chart = top_view_chart(
+            root,
+            "Classified map, top-down (world frame)",
+            (xr, yr),
+            &TopView::LARGE.with_caption(28),
+            path,
+        )?;
         let step = points.len().div_ceil(MAX_DRAWN_POINTS).max(1);
         for (class, name) in [
             (Class::Normal, "normal"),
@@ -210,21 +201,16 @@ pub fn trajectory_png(path: &Path, series: &[(&str, Vec<[f64; 2]>)]) -> Result<(
     );
     let palette = [BLACK, RGBColor(220, 30, 30), RGBColor(30, 90, 255)];
     render(path, (w, h), |root| {
-        let mut chart = ChartBuilder::on(root)
-            .caption("Trajectory (world frame, top-down)", ("sans-serif", 26))
-            .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(55)
-            .build_cartesian_2d(xr, yr)
-            .map_err(|e| plot_err(path, e))?;
-        chart
-            .configure_mesh()
-            .x_desc("x [m]")
-            .y_desc("y [m]")
-            .label_style(("sans-serif", 16))
-            .axis_desc_style(("sans-serif", 18))
-            .draw()
-            .map_err(|e| plot_err(path, e))?;
+        let mut chart = top_view_chart(
+            root,
+            "Trajectory (world frame, top-down)",
+            (xr, yr),
+            &TopView {
+                light_grid: true,
+                ..TopView::LARGE
+            },
+            path,
+        )?;
         for (i, (name, s)) in series.iter().enumerate() {
             let colour = palette[i % palette.len()];
             chart
@@ -344,6 +330,71 @@ pub fn metrics_png(path: &Path, metrics: &Metrics) -> Result<()> {
             .draw()
             .map_err(|e| plot_err(path, e))
     })
+}
+
+/// Sizes of a top view in metres (x, y in the world frame).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TopView {
+    /// Caption font, px.
+    pub caption: u32,
+    /// Margin around the chart, px.
+    pub margin: u32,
+    /// Width of the y label area, px.
+    pub y_label_area: u32,
+    /// Tick label font, px.
+    pub labels: u32,
+    /// Axis description font, px.
+    pub axis_desc: u32,
+    /// Draw the light grid lines between the bold ones.
+    pub light_grid: bool,
+}
+
+impl TopView {
+    /// The single-panel plots.
+    pub const LARGE: Self = Self {
+        caption: 26,
+        margin: 15,
+        y_label_area: 55,
+        labels: 16,
+        axis_desc: 18,
+        light_grid: false,
+    };
+
+    /// The same with another caption size.
+    pub const fn with_caption(self, caption: u32) -> Self {
+        Self { caption, ..self }
+    }
+}
+
+/// A captioned chart over `ranges` with metre axes and its mesh drawn:
+/// the first layers of every top view.
+pub(crate) fn top_view_chart<'a, DB: DrawingBackend + 'a>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    caption: &str,
+    ranges: (std::ops::Range<f64>, std::ops::Range<f64>),
+    style: &TopView,
+    path: &Path,
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>>
+where
+    DB::ErrorType: 'static,
+{
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", style.caption))
+        .margin(style.margin)
+        .x_label_area_size(40)
+        .y_label_area_size(style.y_label_area)
+        .build_cartesian_2d(ranges.0, ranges.1)
+        .map_err(|e| plot_err(path, e))?;
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc("x [m]")
+        .y_desc("y [m]")
+        .label_style(("sans-serif", style.labels))
+        .axis_desc_style(("sans-serif", style.axis_desc));
+    if !style.light_grid {
+        mesh.light_line_style(WHITE.mix(0.0));
+    }
+    mesh.draw().map_err(|e| plot_err(path, e))?;
+    Ok(chart)
 }
 
 /// The top-view charts' last layers: the trajectory as a black line (when
