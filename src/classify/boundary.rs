@@ -4,7 +4,7 @@
 //! (the paper), or Zhao 2020's "glass window", a ring × column box of the
 //! organized scan around the plane's inliers.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Point2, Point3, Vector3};
 
 use crate::reflect::BoundedPlane;
 use crate::sensor::OrganizedScan;
@@ -93,6 +93,8 @@ impl Window {
 #[derive(Debug, Clone)]
 pub struct BeamPlanes<'a> {
     planes: &'a [BoundedPlane],
+    /// Per plane, the chart box outside which its boundary says no.
+    extents: Vec<(Point2<f64>, Point2<f64>)>,
     windows: Option<Vec<Window>>,
     margin: f64,
     reach: f64,
@@ -103,6 +105,7 @@ impl<'a> BeamPlanes<'a> {
     pub fn hulls(planes: &'a [BoundedPlane], margin: f64) -> Self {
         Self {
             planes,
+            extents: planes.iter().map(|bp| bp.extent_2d(margin)).collect(),
             windows: None,
             margin,
             reach: f64::INFINITY,
@@ -113,6 +116,7 @@ impl<'a> BeamPlanes<'a> {
     pub fn windows(planes: &'a [BoundedPlane], windows: Vec<Window>) -> Self {
         Self {
             planes,
+            extents: Vec::new(),
             windows: Some(windows),
             margin: 0.0,
             reach: f64::INFINITY,
@@ -169,7 +173,12 @@ impl<'a> BeamPlanes<'a> {
             let inside = match (&self.windows, cell) {
                 (Some(w), Some((ring, col, columns))) => w[k].contains(ring, col, columns),
                 (Some(_), None) => false,
-                (None, _) => bp.bounds(&(origin + dir * t), self.margin),
+                (None, _) => {
+                    let uv = bp.chart.to_2d(&(origin + dir * t));
+                    let (lo, hi) = self.extents[k];
+                    let boxed = uv.x >= lo.x && uv.x <= hi.x && uv.y >= lo.y && uv.y <= hi.y;
+                    boxed && bp.bounds_2d(&uv, self.margin)
+                }
             };
             if inside {
                 best = Some((k, t));

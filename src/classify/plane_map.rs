@@ -80,7 +80,7 @@ impl PlaneMapClassifier {
     /// Indices of the points whose beams cross no map plane or stop in front
     /// of it: the frame's observed ordinary surfaces (Normal by the beam test
     /// alone), used to build the sequence's surface support.
-    pub fn surface_points(&self, input: &FrameInput<'_>) -> Vec<usize> {
+    pub fn surface_points(&self, input: &FrameInput<'_>) -> Vec<u32> {
         let planes = Self::planes_in_sensor_frame(input);
         let glass = self.params.decision.glass_distance;
         let beams = BeamPlanes::hulls(&planes, self.params.hull_margin).with_reach(glass);
@@ -96,7 +96,7 @@ impl PlaneMapClassifier {
                     Some((_, t)) => p.coords.norm() < t - glass,
                 }
             })
-            .map(|(i, _)| i)
+            .map(|(i, _)| i as u32)
             .collect()
     }
 }

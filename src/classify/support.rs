@@ -7,31 +7,42 @@
 //!
 //! The points are thinned to one per small voxel and bucketed in cubes as
 //! large as the query radius, so "is there a point within r" inspects at most
-//! 27 buckets; building it is a linear pass (no tree to balance), which
-//! matters because it is rebuilt for every run over all frames.
-
-use std::collections::HashMap;
-use std::hash::BuildHasherDefault;
+//! 8 buckets; building it is two linear passes (no tree to balance), which
+//! matters because it is rebuilt for every run over all frames. The buckets
+//! are ranges of one flat array (a counting sort), not a vector each.
 
 use nalgebra::{Isometry3, Point3};
 
 use super::decide::SurfaceSupport;
-use crate::geometry::voxel::{packed_voxel_key, voxel_key, FxHashSet, FxHasher};
+use crate::geometry::fastmath::floor_i64;
+use crate::geometry::voxel::{FxHashMap, VoxelSet};
 
 /// Observed surface points in the world frame, answering radius queries.
 pub struct WorldSupport {
     radius: f64,
-    buckets: HashMap<[i64; 3], Vec<[f32; 3]>, BuildHasherDefault<FxHasher>>,
-    points: usize,
+    /// Bucket key (packed cube of edge `radius`) to bucket number.
+    buckets: FxHashMap<u64, u32>,
+    /// Bucket `b` holds `points[starts[b]..starts[b + 1]]`.
+    starts: Vec<u32>,
+    points: Vec<[f32; 3]>,
 }
 
 impl std::fmt::Debug for WorldSupport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("WorldSupport")
-            .field("points", &self.points)
+            .field("points", &self.points.len())
             .field("radius", &self.radius)
             .finish()
     }
+}
+
+/// A cube's integer coordinates packed into one key: 21 bits per axis, two's
+/// complement, exact within ±2^20 cubes (±330 km at 0.3 m); farther away two
+/// cubes may share a bucket, which only costs distance tests, never answers.
+#[inline]
+fn bucket_key(c: [i64; 3]) -> u64 {
+    let m = (1u64 << 21) - 1;
+    (c[0] as u64 & m) | ((c[1] as u64 & m) << 21) | ((c[2] as u64 & m) << 42)
 }
 
 impl WorldSupport {
@@ -39,38 +50,71 @@ impl WorldSupport {
     /// `voxel`-sized cube (deterministic for a given input order), for
     /// queries of radius up to `radius`.
     pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64, radius: f64) -> Self {
-        let points = points.into_iter();
         let radius = radius.max(voxel).max(1e-3);
-        let mut seen =
-            FxHashSet::with_capacity_and_hasher(points.size_hint().0 / 4, Default::default());
-        let mut buckets: HashMap<[i64; 3], Vec<[f32; 3]>, BuildHasherDefault<FxHasher>> =
-            HashMap::default();
-        let mut count = 0;
+        let inv = 1.0 / radius;
+        let mut seen = VoxelSet::new(voxel);
+        let mut buckets = FxHashMap::default();
+        // Pass 1: the kept points with their bucket numbers, and the counts.
+        let mut kept: Vec<(u32, [f32; 3])> = Vec::new();
+        let mut counts: Vec<u32> = Vec::new();
+        // Consecutive points mostly share a bucket: remember the last one.
+        let mut last: Option<(u64, u32)> = None;
         for p in points {
             let xyz = [p.x, p.y, p.z];
-            if seen.insert(packed_voxel_key(xyz, voxel)) {
-                buckets
-                    .entry(voxel_key(xyz, radius))
-                    .or_default()
-                    .push([p.x as f32, p.y as f32, p.z as f32]);
-                count += 1;
+            if !seen.insert(xyz, 0) {
+                continue;
             }
+            let key = bucket_key([
+                floor_i64(p.x * inv),
+                floor_i64(p.y * inv),
+                floor_i64(p.z * inv),
+            ]);
+            let b = match last {
+                Some((k, b)) if k == key => b,
+                _ => {
+                    let next = counts.len() as u32;
+                    let b = *buckets.entry(key).or_insert(next);
+                    if b == next {
+                        counts.push(0);
+                    }
+                    last = Some((key, b));
+                    b
+                }
+            };
+            counts[b as usize] += 1;
+            kept.push((b, [p.x as f32, p.y as f32, p.z as f32]));
+        }
+        // Pass 2: counting sort into one array, input order kept per bucket.
+        let mut starts = Vec::with_capacity(counts.len() + 1);
+        let mut total = 0u32;
+        starts.push(0);
+        for &c in &counts {
+            total += c;
+            starts.push(total);
+        }
+        let mut fill: Vec<u32> = starts[..counts.len()].to_vec();
+        let mut flat = vec![[0f32; 3]; kept.len()];
+        for (b, q) in kept {
+            let slot = &mut fill[b as usize];
+            flat[*slot as usize] = q;
+            *slot += 1;
         }
         Self {
             radius,
             buckets,
-            points: count,
+            starts,
+            points: flat,
         }
     }
 
     /// Number of points kept.
     pub fn len(&self) -> usize {
-        self.points
+        self.points.len()
     }
 
     /// Whether no point was kept.
     pub fn is_empty(&self) -> bool {
-        self.points == 0
+        self.points.is_empty()
     }
 
     /// Whether a kept point lies within `radius` of `p` (world frame);
@@ -78,15 +122,20 @@ impl WorldSupport {
     pub fn near_world(&self, p: &Point3<f64>, radius: f64) -> bool {
         let r = radius.min(self.radius);
         let r2 = (r * r) as f32;
-        let c = voxel_key([p.x, p.y, p.z], self.radius);
-        let q = [p.x as f32, p.y as f32, p.z as f32];
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(bucket) = self.buckets.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+        let inv = 1.0 / self.radius;
+        let xyz = [p.x, p.y, p.z];
+        // The cubes the query ball overlaps: one or two per axis.
+        let lo = xyz.map(|v| floor_i64((v - r) * inv));
+        let hi = xyz.map(|v| floor_i64((v + r) * inv));
+        let q = xyz.map(|v| v as f32);
+        for cx in lo[0]..=hi[0] {
+            for cy in lo[1]..=hi[1] {
+                for cz in lo[2]..=hi[2] {
+                    let Some(&b) = self.buckets.get(&bucket_key([cx, cy, cz])) else {
                         continue;
                     };
-                    if bucket.iter().any(|b| {
+                    let range = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
+                    if self.points[range].iter().any(|b| {
                         let (x, y, z) = (b[0] - q[0], b[1] - q[1], b[2] - q[2]);
                         x * x + y * y + z * z <= r2
                     }) {

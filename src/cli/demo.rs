@@ -58,7 +58,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let (output, map) =
         run_method(&sequence, &config).context("plane-optimized on the simulated scene")?;
     let sim_out = args.out.join("sim");
-    write_outputs(&sim_out, &config, &sequence, &output, map.as_ref())?;
+    let confusion = write_outputs(&sim_out, &config, &sequence, &output, map.as_ref())?;
     let sim_title = format!("specular demo: simulated scene '{}'", args.scene);
     write_visual(
         &sim_out,
@@ -74,7 +74,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         sequence.len(),
         sim_time.as_secs_f64()
     );
-    if let Some(conf) = output.confusion(&sequence) {
+    if let Some(conf) = confusion {
         print!("{}", conf.metrics().table());
     }
     if let Some(map) = &map {
@@ -93,7 +93,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     )
     .with_context(|| format!("running the demo on {}", sample.display()))?;
     let real_out = args.out.join("real");
-    write_outputs(&real_out, &config, &sequence, &output, map.as_ref())?;
+    let confusion = write_outputs(&real_out, &config, &sequence, &output, map.as_ref())?;
     let real_title = "specular demo: bundled 3DRef sample".to_string();
     write_visual(
         &real_out,
@@ -108,7 +108,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         sequence.len(),
         sample.display()
     );
-    if let Some(conf) = output.confusion(&sequence) {
+    if let Some(conf) = confusion {
         print!("{}", conf.metrics().table());
     }
     print_outputs(&real_out, args.no_mcap);

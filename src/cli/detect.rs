@@ -6,6 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use specular::classify::Class;
 use specular::config::{Config, Method};
+use specular::eval::Confusion;
 use specular::io;
 use specular::pipeline::plane_optimized::around_corner_map;
 use specular::pipeline::{
@@ -68,7 +69,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
         (None, None) => bail!("give --frames DIR or --bag FILE --topic NAME"),
     };
     let start = std::time::Instant::now();
-    write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
+    let confusion = write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
     if !args.lean {
         let visual = VisualOptions {
             mcap: !args.no_mcap,
@@ -99,7 +100,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
             config.map.min_observations
         );
     }
-    if let Some(conf) = output.confusion(&sequence) {
+    if let Some(conf) = confusion {
         print!("{}", conf.metrics().table());
     }
     if args.timings {
@@ -174,14 +175,15 @@ pub(crate) fn run_method(
 }
 
 /// Write predictions, metrics (when labelled), the configuration used and,
-/// with a plane map, `planes.json` and `around_corner.ply`.
+/// with a plane map, `planes.json` and `around_corner.ply`. Returns the
+/// confusion counts when the frames are labelled.
 pub(crate) fn write_outputs(
     out: &Path,
     config: &Config,
     sequence: &Sequence,
     output: &RunOutput,
     map: Option<&PlaneOptimizedOutput>,
-) -> Result<()> {
+) -> Result<Option<Confusion>> {
     let pred_dir = out.join("predictions");
     for f in &output.frames {
         let ids: Vec<u8> = f.classes.iter().map(|c| c.id()).collect();
@@ -210,11 +212,12 @@ pub(crate) fn write_outputs(
         );
         io::write_map_ply(&out.join("around_corner.ply"), &points)?;
     }
-    if let Some(conf) = output.confusion(sequence) {
+    let confusion = output.confusion(sequence);
+    if let Some(conf) = &confusion {
         let json = serde_json::to_string_pretty(&conf.metrics()).context("serialising metrics")?;
         io::write_atomic(&out.join("metrics.json"), |w| {
             std::io::Write::write_all(w, json.as_bytes())
         })?;
     }
-    Ok(())
+    Ok(confusion)
 }

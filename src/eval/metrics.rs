@@ -41,13 +41,29 @@ pub struct Confusion {
 impl Confusion {
     /// Add one frame's labels and predictions (same length and order).
     pub fn add(&mut self, labels: &[u8], predictions: &[Class]) {
-        for (&l, &p) in labels.iter().zip(predictions) {
-            let Some(t) = truth_class(l).and_then(class_index) else {
-                self.ignored += 1;
+        self.add_pairs(labels.iter().copied().zip(predictions.iter().copied()));
+    }
+
+    /// Add (label, prediction) pairs. Counted in a histogram of the raw
+    /// pairs first (class ids are below 8), mapped to the table once.
+    pub fn add_pairs(&mut self, pairs: impl IntoIterator<Item = (u8, Class)>) {
+        let mut hist = vec![0u64; 256 * 8];
+        for (l, p) in pairs {
+            hist[(l as usize) << 3 | (p.id() as usize & 7)] += 1;
+        }
+        for (label, row) in hist.chunks_exact(8).enumerate() {
+            let n: u64 = row.iter().sum();
+            if n == 0 {
+                continue;
+            }
+            let Some(t) = truth_class(label as u8).and_then(class_index) else {
+                self.ignored += n;
                 continue;
             };
-            let col = class_index(p).map_or(0, |k| k + 1);
-            self.counts[t][col] += 1;
+            for (id, &count) in row.iter().enumerate() {
+                let col = class_index(Class::from_id(id as u32)).map_or(0, |k| k + 1);
+                self.counts[t][col] += count;
+            }
         }
     }
 

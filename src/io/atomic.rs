@@ -26,7 +26,7 @@ where
     ));
     let result = (|| {
         let file = File::create(&tmp)?;
-        let mut w = BufWriter::with_capacity(1 << 20, file);
+        let mut w = BufWriter::with_capacity(64 << 10, file);
         fill(&mut w)?;
         w.flush()?;
         // No fsync: the rename alone guarantees that readers never see a

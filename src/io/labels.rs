@@ -8,11 +8,16 @@ use crate::{Error, Result};
 
 /// Write labels as little-endian `u32` (atomically).
 pub fn write_labels(path: &Path, labels: &[u8]) -> Result<()> {
-    let bytes: Vec<u8> = labels
-        .iter()
-        .flat_map(|&l| (l as u32).to_le_bytes())
-        .collect();
-    crate::io::write_atomic(path, |w| w.write_all(&bytes))
+    crate::io::write_atomic(path, |w| {
+        let mut chunk = [0u8; 4096];
+        for ids in labels.chunks(chunk.len() / 4) {
+            for (out, &l) in chunk.chunks_exact_mut(4).zip(ids) {
+                out.copy_from_slice(&(l as u32).to_le_bytes());
+            }
+            w.write_all(&chunk[..ids.len() * 4])?;
+        }
+        Ok(())
+    })
 }
 
 /// Read a `.label` file. Errors (naming the file) when its length is not a

@@ -43,15 +43,20 @@ pub fn write_map_ply(path: &Path, points: &[MapPoint]) -> Result<()> {
             "ply\nformat binary_little_endian 1.0\ncomment written by specular: class 1 normal, 2 reflective surface, 5 reflection, 6 obstacle behind glass\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar class\nproperty uchar mirrored\nend_header\n",
             points.len()
         )?;
-        let mut buf = Vec::with_capacity(points.len() * 17);
-        for p in points {
-            for c in p.xyz {
-                buf.extend_from_slice(&c.to_le_bytes());
+        // Through a small reused chunk: no buffer the size of the map.
+        const RECORD: usize = 17;
+        let mut chunk = [0u8; 256 * RECORD];
+        for points in points.chunks(256) {
+            for (out, p) in chunk.chunks_exact_mut(RECORD).zip(points) {
+                for (k, c) in p.xyz.iter().enumerate() {
+                    out[4 * k..4 * k + 4].copy_from_slice(&c.to_le_bytes());
+                }
+                out[12..15].copy_from_slice(&class_colour(p.class, p.mirrored));
+                out[15] = p.class.id();
+                out[16] = p.mirrored as u8;
             }
-            buf.extend_from_slice(&class_colour(p.class, p.mirrored));
-            buf.push(p.class.id());
-            buf.push(p.mirrored as u8);
+            w.write_all(&chunk[..points.len() * RECORD])?;
         }
-        w.write_all(&buf)
+        Ok(())
     })
 }

@@ -21,7 +21,7 @@ use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
 use crate::config::{BoundaryMode, Config};
-use crate::geometry::voxel::{packed_voxel_key, FxHashSet};
+use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
 use crate::reflect::{BoundedPlane, Detection};
@@ -219,25 +219,21 @@ fn sequence_support<'a>(
     frames: &[usize],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
 ) -> WorldSupport {
-    let per_frame: Vec<Vec<Point3<f64>>> = frames
+    // Indices only (4 bytes a point): the world points are made as the
+    // support consumes them, in frame order.
+    let per_frame: Vec<Vec<u32>> = frames
         .par_iter()
-        .copied()
-        .map(|k| {
-            let inp = input(k);
-            classifier
-                .surface_points(&inp)
-                .into_iter()
-                .map(|i| inp.pose * inp.frame.points[i].position())
-                .collect()
-        })
+        .map(|&k| classifier.surface_points(&input(k)))
         .collect();
     let params = classifier.params();
-    // Flattened into one vector so the builder knows the count up front.
-    WorldSupport::build(
-        per_frame.concat(),
-        params.support_voxel,
-        params.decision.support_radius,
-    )
+    let points = frames.iter().zip(&per_frame).flat_map(|(&k, indices)| {
+        let inp = input(k);
+        let (pose, points) = (inp.pose, &inp.frame.points);
+        indices
+            .iter()
+            .map(move |&i| pose * points[i as usize].position())
+    });
+    WorldSupport::build(points, params.support_voxel, params.decision.support_radius)
 }
 
 /// The classified map in the world frame ("around the corner"): Normal,
@@ -254,31 +250,34 @@ pub fn around_corner_map(
     let Some(poses) = &sequence.poses else {
         return Vec::new();
     };
-    let per_frame: Vec<Vec<MapPoint>> = (0..sequence.len())
+    // The mirrored reflections of every frame (the beam tests), in parallel.
+    let mirrored: Vec<Vec<(usize, Point3<f64>)>> = (0..sequence.len().min(classes.len()))
         .into_par_iter()
         .map(|k| {
-            let frame = &sequence.frames[k];
-            let pose = poses[k];
-            let to_sensor = pose.inverse();
+            let to_sensor = poses[k].inverse();
             let origin = Point3::origin();
             let planes: Vec<BoundedPlane> = map_planes
                 .iter()
                 .map(|bp| bp.transformed(&to_sensor).facing(&origin))
                 .collect();
-            let mut out: Vec<MapPoint> = frame
-                .points
-                .iter()
-                .zip(&classes[k])
-                .filter(|(_, c)| matches!(c, Class::Normal | Class::Glass | Class::Obstacle))
-                .map(|(pt, &class)| map_point(pose * pt.position(), class, false))
-                .collect();
-            for (_, q) in mirror_reflections(frame, &classes[k], &planes, hull_margin) {
-                out.push(map_point(pose * q, Class::Reflection, true));
-            }
-            out
+            mirror_reflections(&sequence.frames[k], &classes[k], &planes, hull_margin)
         })
         .collect();
-    thin(per_frame, voxel)
+    // Thinned in one pass in frame order, no per-point buffers in between.
+    let mut thin = Thinning::new(voxel);
+    for (k, mirrored) in mirrored.iter().enumerate() {
+        let pose = poses[k];
+        let (r, t) = (pose.rotation.to_rotation_matrix().into_inner(), pose.translation.vector);
+        for (pt, &class) in sequence.frames[k].points.iter().zip(&classes[k]) {
+            if matches!(class, Class::Normal | Class::Glass | Class::Obstacle) {
+                thin.offer(Point3::from(r * pt.position().coords + t), class, false);
+            }
+        }
+        for (_, q) in mirrored {
+            thin.offer(pose * q, Class::Reflection, true);
+        }
+    }
+    thin.kept
 }
 
 /// The accumulated classified map in the world frame: every classified point
@@ -289,46 +288,41 @@ pub fn measured_map(sequence: &Sequence, classes: &[Vec<Class>], voxel: f64) -> 
     let Some(poses) = &sequence.poses else {
         return Vec::new();
     };
-    let per_frame: Vec<Vec<MapPoint>> = (0..sequence.len().min(classes.len()))
-        .into_par_iter()
-        .map(|k| {
-            sequence.frames[k]
-                .points
-                .iter()
-                .zip(&classes[k])
-                .filter(|(_, c)| **c != Class::Unclassified)
-                .map(|(pt, &class)| map_point(poses[k] * pt.position(), class, false))
-                .collect()
-        })
-        .collect();
-    thin(per_frame, voxel)
-}
-
-fn map_point(p: Point3<f64>, class: Class, mirrored: bool) -> MapPoint {
-    MapPoint {
-        xyz: [p.x as f32, p.y as f32, p.z as f32],
-        class,
-        mirrored,
-    }
-}
-
-/// Keep the first point per (voxel, class, mirrored), in input order.
-fn thin(per_frame: Vec<Vec<MapPoint>>, voxel: f64) -> Vec<MapPoint> {
-    let total: usize = per_frame.iter().map(Vec::len).sum();
-    if !(voxel > 0.0) {
-        return per_frame.concat();
-    }
-    // One u64 per key: the voxel in the low 60 bits (its 21-bit axes cut to
-    // 20: ±2^19 voxels, ±15 km at 3 cm), class and mirrored flag above.
-    let mut seen = FxHashSet::with_capacity_and_hasher(total / 2, Default::default());
-    let mut kept = Vec::with_capacity(total / 2);
-    for p in per_frame.into_iter().flatten() {
-        let v = packed_voxel_key(p.xyz.map(f64::from), voxel);
-        let v = (v & 0xF_FFFF) | ((v >> 1) & (0xF_FFFF << 20)) | ((v >> 2) & (0xF_FFFF << 40));
-        let tag = (p.class.id() as u64 & 0x7) | (p.mirrored as u64) << 3;
-        if seen.insert(v | tag << 60) {
-            kept.push(p);
+    let mut thin = Thinning::new(voxel);
+    for k in 0..sequence.len().min(classes.len()) {
+        for (pt, &class) in sequence.frames[k].points.iter().zip(&classes[k]) {
+            if class != Class::Unclassified {
+                thin.offer(poses[k] * pt.position(), class, false);
+            }
         }
     }
-    kept
+    thin.kept
+}
+
+/// Keeps the first point offered per (voxel, class, mirrored); a voxel of 0
+/// (or less) keeps every point.
+struct Thinning {
+    seen: Option<VoxelSet>,
+    kept: Vec<MapPoint>,
+}
+
+impl Thinning {
+    fn new(voxel: f64) -> Self {
+        Self {
+            seen: (voxel > 0.0).then(|| VoxelSet::new(voxel)),
+            kept: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn offer(&mut self, p: Point3<f64>, class: Class, mirrored: bool) {
+        let tag = (class.id() & 0x7) | (mirrored as u8) << 3;
+        if self.seen.as_mut().is_none_or(|s| s.insert([p.x, p.y, p.z], tag)) {
+            self.kept.push(MapPoint {
+                xyz: [p.x as f32, p.y as f32, p.z as f32],
+                class,
+                mirrored,
+            });
+        }
+    }
 }

@@ -13,7 +13,7 @@ pub mod intensity_peak;
 pub use detector::{CandidateRansacDetector, CandidateSource, DetectorParams};
 pub use intensity_peak::IntensityPeakParams;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point2, Point3};
 
 use crate::cloud::Frame;
 use std::sync::Arc;
@@ -61,7 +61,12 @@ impl BoundedPlane {
     /// boundary grown by `margin`.
     #[inline]
     pub fn bounds(&self, q: &Point3<f64>, margin: f64) -> bool {
-        let uv = self.chart.to_2d(q);
+        self.bounds_2d(&self.chart.to_2d(q), margin)
+    }
+
+    /// [`BoundedPlane::bounds`] for a point given in chart coordinates.
+    pub fn bounds_2d(&self, uv: &Point2<f64>, margin: f64) -> bool {
+        let uv = *uv;
         if let Some(panes) = &self.panes {
             // Opaque evidence inside a convex pane is a mullion or wall strip.
             if let Some(Surface::Opaque | Surface::Open) =
@@ -87,6 +92,37 @@ impl BoundedPlane {
         } else {
             self.boundary.signed_distance(&uv) <= margin
         }
+    }
+
+    /// A box in chart coordinates, `(min, max)`, outside which
+    /// [`BoundedPlane::bounds`] with this `margin` is false: a cheap test
+    /// that spares most beams the boundary and evidence lookups.
+    pub fn extent_2d(&self, margin: f64) -> (Point2<f64>, Point2<f64>) {
+        let mut lo = Point2::new(f64::INFINITY, f64::INFINITY);
+        let mut hi = Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY);
+        let mut cover = |p: &Point2<f64>, grow: f64| {
+            lo = Point2::new(lo.x.min(p.x - grow), lo.y.min(p.y - grow));
+            hi = Point2::new(hi.x.max(p.x + grow), hi.y.max(p.y + grow));
+        };
+        // Growing by `margin` covers both "inside" and "within the margin".
+        let grow = margin.max(0.0);
+        match &self.panes {
+            // With panes only they can say yes.
+            Some(panes) => panes
+                .iter()
+                .flat_map(|p| p.vertices())
+                .for_each(|v| cover(v, grow)),
+            None => {
+                self.boundary.vertices().iter().for_each(|v| cover(v, grow));
+                // Decided transparent evidence may reach beyond the hull.
+                if let Some(e) = &self.evidence {
+                    let size = nalgebra::Vector2::new(e.cols as f64, e.rows as f64) * e.cell;
+                    cover(&e.min, 0.0);
+                    cover(&(e.min + size), 0.0);
+                }
+            }
+        }
+        (lo, hi)
     }
 
     /// The same bounded plane in another frame (`t` maps the current frame to
