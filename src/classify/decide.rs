@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
 use super::Class;
+use crate::reflect::BoundedPlane;
 use crate::cloud::Frame;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -116,12 +117,43 @@ enum Beam {
     Behind { plane: u16 },
 }
 
+/// Where a point's beam first crosses a reflective plane inside its
+/// boundary: the plane's index and the range of the crossing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamHit {
+    /// Index of the plane.
+    pub plane: u32,
+    /// Range from the sensor at which the beam crosses it, m.
+    pub range: f64,
+}
+
+/// The beam test of every point of `frame` (step 1 of [`decide`]): the
+/// first crossing of `planes` up to `reach` beyond the point
+/// ([`BeamPlanes::first_hit`]). Computed once, it serves both the decision
+/// and whatever else needs the same test (the sequence's surface support).
+pub fn beam_hits(frame: &Frame, scan: &OrganizedScan, planes: &BeamPlanes<'_>, reach: f64) -> Vec<Option<BeamHit>> {
+    let columns = scan.columns();
+    let planes = planes.clone().with_reach(reach);
+    frame
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, pt)| {
+            let (ring, col) = scan.ring_column(scan.cell_of(i));
+            planes
+                .first_hit(&pt.position(), Some((ring, col, columns)))
+                .map(|(k, t)| BeamHit {
+                    plane: k as u32,
+                    range: t,
+                })
+        })
+        .collect()
+}
+
 /// Classify every point of `frame` against `planes`.
 ///
-/// `cell_windows` says whether the planes use window boundaries (then the
-/// point's cell is passed to the beam test). `support` adds the neighbour
-/// search of the support test; `None` uses only the frame's own Normal points
-/// when `support_radius > 0`.
+/// `support` adds the neighbour search of the support test; `None` uses only
+/// the frame's own Normal points when `support_radius > 0`.
 pub fn decide(
     frame: &Frame,
     scan: &OrganizedScan,
@@ -130,21 +162,34 @@ pub fn decide(
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
 ) -> Vec<Class> {
+    let hits = beam_hits(frame, scan, planes, params.glass_distance);
+    decide_with_hits(frame, scan, sensor, planes.planes(), &hits, params, support)
+}
+
+/// [`decide`] with the beam test already done: `hits` from [`beam_hits`]
+/// with reach `params.glass_distance` against `bounded`.
+pub fn decide_with_hits(
+    frame: &Frame,
+    scan: &OrganizedScan,
+    sensor: &SensorModel,
+    bounded: &[BoundedPlane],
+    hits: &[Option<BeamHit>],
+    params: &DecisionParams,
+    support: Option<&dyn SurfaceSupport>,
+) -> Vec<Class> {
     let n = frame.points.len();
-    let columns = scan.columns();
-    let bounded = planes.planes();
-    let planes = planes.clone().with_reach(params.glass_distance);
     // 1. Beam test.
     let beams: Vec<Beam> = frame
         .points
         .iter()
+        .zip(hits)
         .enumerate()
-        .map(|(i, pt)| {
+        .map(|(i, (pt, hit))| {
             let p = pt.position();
-            let (ring, col) = scan.ring_column(scan.cell_of(i));
-            match planes.first_hit(&p, Some((ring, col, columns))) {
+            match *hit {
                 None => Beam::Clear,
-                Some((k, t)) => {
+                Some(BeamHit { plane: k, range: t }) => {
+                    let k = k as usize;
                     let s = p.coords.norm() - t;
                     if s.abs() <= params.glass_distance {
                         // A single echo as bright as a wall is the wall.

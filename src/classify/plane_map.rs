@@ -6,7 +6,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
-use super::decide::{decide, DecisionParams, SurfaceSupport};
+use super::decide::{beam_hits, decide_with_hits, BeamHit, DecisionParams, SurfaceSupport};
 use super::{Class, Classifier, FrameInput};
 use crate::reflect::BoundedPlane;
 
@@ -77,24 +77,35 @@ impl PlaneMapClassifier {
             .collect()
     }
 
-    /// Indices of the points whose beams cross no map plane or stop in front
-    /// of it: the frame's observed ordinary surfaces (Normal by the beam test
-    /// alone), used to build the sequence's surface support.
-    pub fn surface_points(&self, input: &FrameInput<'_>) -> Vec<u32> {
+    /// The beam test of every point against the map planes (sensor frame),
+    /// as [`Classifier::classify`] runs it; pass it in
+    /// [`FrameInput::beam_hits`] to run it only once per frame.
+    pub fn beam_hits(&self, input: &FrameInput<'_>) -> Vec<Option<BeamHit>> {
         let planes = Self::planes_in_sensor_frame(input);
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
+        beam_hits(
+            input.frame,
+            input.scan,
+            &beams,
+            self.params.decision.glass_distance,
+        )
+    }
+
+    /// Indices of the points whose beams cross no map plane or stop in front
+    /// of it, by the beam test `hits` ([`PlaneMapClassifier::beam_hits`]):
+    /// the frame's observed ordinary surfaces (Normal by the beam test
+    /// alone), used to build the sequence's surface support.
+    pub fn surface_points(&self, input: &FrameInput<'_>, hits: &[Option<BeamHit>]) -> Vec<u32> {
         let glass = self.params.decision.glass_distance;
-        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin).with_reach(glass);
         input
             .frame
             .points
             .iter()
+            .zip(hits)
             .enumerate()
-            .filter(|(_, pt)| {
-                let p = pt.position();
-                match beams.first_hit(&p, None) {
-                    None => true,
-                    Some((_, t)) => p.coords.norm() < t - glass,
-                }
+            .filter(|(_, (pt, hit))| match hit {
+                None => true,
+                Some(h) => pt.position().coords.norm() < h.range - glass,
             })
             .map(|(i, _)| i as u32)
             .collect()
@@ -108,17 +119,25 @@ impl Classifier for PlaneMapClassifier {
 
     fn classify(&self, input: &FrameInput<'_>) -> Vec<Class> {
         let planes = Self::planes_in_sensor_frame(input);
-        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
         let view = input
             .support
             .filter(|_| self.params.sequence_support)
             .map(|s| s.in_sensor_frame(input.pose));
         let support = view.as_ref().map(|v| v as &dyn SurfaceSupport);
-        decide(
+        let own_hits;
+        let hits = match input.beam_hits {
+            Some(h) => h,
+            None => {
+                own_hits = self.beam_hits(input);
+                &own_hits
+            }
+        };
+        decide_with_hits(
             input.frame,
             input.scan,
             input.sensor,
-            &beams,
+            &planes,
+            hits,
             &self.params.decision,
             support,
         )

@@ -19,7 +19,9 @@ use super::registry::{detector, merger, plane_map_classifier};
 use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
-use crate::classify::{Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
+use crate::classify::{
+    BeamHit, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport,
+};
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
@@ -134,12 +136,25 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         pose: poses[k],
         map_planes: &map_planes,
         support: None,
+        beam_hits: None,
     };
+    // The beam test of every frame, shared by the support and the
+    // classification when the support needs it.
+    let start = Instant::now();
+    let hits: Vec<Vec<Option<BeamHit>>> = if classifier.params().sequence_support {
+        (0..sequence.len())
+            .into_par_iter()
+            .map(|k| classifier.beam_hits(&input(k)))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    timings.add("beam test", start.elapsed());
     let start = Instant::now();
     let support = classifier.params().sequence_support.then(|| {
         let p = classifier.params();
         let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
-        sequence_support(&classifier, &views, &input)
+        sequence_support(&classifier, &views, &hits, &input)
     });
     timings.add("support", start.elapsed());
     let bar = crate::progress::bar(sequence.len(), "classify");
@@ -149,6 +164,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
                 support: support.as_ref(),
+                beam_hits: hits.get(k).map(Vec::as_slice),
                 ..input(k)
             });
             bar.inc(1);
@@ -213,17 +229,19 @@ pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> 
     kept
 }
 
-/// The observed surfaces of the keyframes (world frame), thinned by voxel.
+/// The observed surfaces of the keyframes (world frame), thinned by voxel;
+/// `hits` holds every frame's beam test.
 fn sequence_support<'a>(
     classifier: &PlaneMapClassifier,
     frames: &[usize],
+    hits: &[Vec<Option<BeamHit>>],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
 ) -> WorldSupport {
     // Indices only (4 bytes a point): the world points are made as the
     // support consumes them, in frame order.
     let per_frame: Vec<Vec<u32>> = frames
         .par_iter()
-        .map(|&k| classifier.surface_points(&input(k)))
+        .map(|&k| classifier.surface_points(&input(k), &hits[k]))
         .collect();
     let params = classifier.params();
     let points = frames.iter().zip(&per_frame).flat_map(|(&k, indices)| {

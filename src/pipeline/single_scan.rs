@@ -87,6 +87,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
                 organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
+                beam_hits: None,
                 frame,
                 scan: &scan,
                 sensor: &sensor,
