@@ -6,6 +6,7 @@
 
 use nalgebra::{Point2, Point3, Vector3};
 
+use crate::geometry::Plane;
 use crate::reflect::BoundedPlane;
 use crate::sensor::OrganizedScan;
 
@@ -164,7 +165,7 @@ impl<'a> BeamPlanes<'a> {
             if !relevant(bp) {
                 continue;
             }
-            let Some(t) = bp.plane.ray_intersection(&origin, &dir) else {
+            let Some(t) = crossing_along(&bp.plane, &dir) else {
                 continue;
             };
             if t > range + self.reach || best.is_some_and(|(_, bt)| bt <= t) {
@@ -186,6 +187,24 @@ impl<'a> BeamPlanes<'a> {
         }
         best
     }
+}
+
+/// Range at which the beam from the sensor origin through `p` crosses
+/// `plane` (`None` when parallel or behind the sensor): the same arithmetic
+/// as [`BeamPlanes::first_hit`], so the same value bit for bit.
+#[inline]
+pub fn beam_crossing(plane: &Plane, p: &Point3<f64>) -> Option<f64> {
+    let range = p.coords.norm();
+    if !(range > 0.0) {
+        return None;
+    }
+    crossing_along(plane, &(p.coords / range))
+}
+
+/// Range along the unit direction `dir` from the origin to `plane`.
+#[inline]
+fn crossing_along(plane: &Plane, dir: &Vector3<f64>) -> Option<f64> {
+    plane.ray_intersection(&Point3::origin(), dir)
 }
 
 #[cfg(test)]

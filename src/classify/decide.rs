@@ -26,7 +26,7 @@
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
-use super::boundary::BeamPlanes;
+use super::boundary::{beam_crossing, BeamPlanes};
 use super::Class;
 use crate::reflect::BoundedPlane;
 use crate::cloud::Frame;
@@ -122,32 +122,66 @@ enum Beam {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BeamHit {
     /// Index of the plane.
-    pub plane: u32,
+    pub plane: usize,
     /// Range from the sensor at which the beam crosses it, m.
     pub range: f64,
 }
 
-/// The beam test of every point of `frame` (step 1 of [`decide`]): the
-/// first crossing of `planes` up to `reach` beyond the point
-/// ([`BeamPlanes::first_hit`]). Computed once, it serves both the decision
-/// and whatever else needs the same test (the sequence's surface support).
-pub fn beam_hits(frame: &Frame, scan: &OrganizedScan, planes: &BeamPlanes<'_>, reach: f64) -> Vec<Option<BeamHit>> {
-    let columns = scan.columns();
-    let planes = planes.clone().with_reach(reach);
-    frame
-        .points
-        .iter()
-        .enumerate()
-        .map(|(i, pt)| {
-            let (ring, col) = scan.ring_column(scan.cell_of(i));
-            planes
-                .first_hit(&pt.position(), Some((ring, col, columns)))
-                .map(|(k, t)| BeamHit {
-                    plane: k as u32,
-                    range: t,
-                })
-        })
-        .collect()
+/// The beam test of one frame (step 1 of [`decide`]): for every point, the
+/// first plane its beam crosses inside its boundary. Computed once, it
+/// serves both the decision and whatever else needs the same test (the
+/// sequence's surface support). Four bytes a point: the crossing range is
+/// recomputed on demand, with the same arithmetic, so it is bit-identical.
+#[derive(Debug, Clone, Default)]
+pub struct BeamHits {
+    /// Plane index per point, `NO_PLANE` where the beam crosses none.
+    first: Vec<u32>,
+}
+
+const NO_PLANE: u32 = u32::MAX;
+
+impl BeamHits {
+    /// The first crossings of `planes` up to `reach` beyond each point of
+    /// `frame` ([`BeamPlanes::first_hit`]).
+    pub fn compute(frame: &Frame, scan: &OrganizedScan, planes: &BeamPlanes<'_>, reach: f64) -> Self {
+        let columns = scan.columns();
+        let planes = planes.clone().with_reach(reach);
+        let first = frame
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, pt)| {
+                let (ring, col) = scan.ring_column(scan.cell_of(i));
+                planes
+                    .first_hit(&pt.position(), Some((ring, col, columns)))
+                    .map_or(NO_PLANE, |(k, _)| k as u32)
+            })
+            .collect();
+        Self { first }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.first.len()
+    }
+
+    /// Whether there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.first.is_empty()
+    }
+
+    /// The crossing of point `i` (at `p`, sensor frame) with `planes`, the
+    /// planes the test ran against.
+    #[inline]
+    pub fn get(&self, i: usize, p: &Point3<f64>, planes: &[BoundedPlane]) -> Option<BeamHit> {
+        let k = *self.first.get(i)?;
+        if k == NO_PLANE {
+            return None;
+        }
+        let plane = k as usize;
+        let range = beam_crossing(&planes.get(plane)?.plane, p)?;
+        Some(BeamHit { plane, range })
+    }
 }
 
 /// Classify every point of `frame` against `planes`.
@@ -162,18 +196,19 @@ pub fn decide(
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
 ) -> Vec<Class> {
-    let hits = beam_hits(frame, scan, planes, params.glass_distance);
+    let hits = BeamHits::compute(frame, scan, planes, params.glass_distance);
     decide_with_hits(frame, scan, sensor, planes.planes(), &hits, params, support)
 }
 
-/// [`decide`] with the beam test already done: `hits` from [`beam_hits`]
-/// with reach `params.glass_distance` against `bounded`.
+/// [`decide`] with the beam test already done: `hits` from
+/// [`BeamHits::compute`] with reach `params.glass_distance` against
+/// `bounded`.
 pub fn decide_with_hits(
     frame: &Frame,
     scan: &OrganizedScan,
     sensor: &SensorModel,
     bounded: &[BoundedPlane],
-    hits: &[Option<BeamHit>],
+    hits: &BeamHits,
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
 ) -> Vec<Class> {
@@ -182,14 +217,12 @@ pub fn decide_with_hits(
     let beams: Vec<Beam> = frame
         .points
         .iter()
-        .zip(hits)
         .enumerate()
-        .map(|(i, (pt, hit))| {
+        .map(|(i, pt)| {
             let p = pt.position();
-            match *hit {
+            match hits.get(i, &p, bounded) {
                 None => Beam::Clear,
                 Some(BeamHit { plane: k, range: t }) => {
-                    let k = k as usize;
                     let s = p.coords.norm() - t;
                     if s.abs() <= params.glass_distance {
                         // A single echo as bright as a wall is the wall.

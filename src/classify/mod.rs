@@ -16,7 +16,7 @@ pub mod plane_map;
 pub mod single_scan;
 pub mod support;
 
-pub use decide::{BeamHit, DecisionParams, SurfaceSupport};
+pub use decide::{BeamHit, BeamHits, DecisionParams, SurfaceSupport};
 pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
 pub use single_scan::SingleScanClassifier;
 pub use support::WorldSupport;
@@ -96,7 +96,7 @@ pub struct FrameInput<'a> {
     pub support: Option<&'a WorldSupport>,
     /// The beam test against `map_planes`, when a pipeline has run it
     /// already ([`PlaneMapClassifier::beam_hits`]); `None` runs it here.
-    pub beam_hits: Option<&'a [Option<BeamHit>]>,
+    pub beam_hits: Option<&'a BeamHits>,
 }
 
 /// Classifies every point of a frame. Implementations are selected by name

@@ -6,7 +6,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
-use super::decide::{beam_hits, decide_with_hits, BeamHit, DecisionParams, SurfaceSupport};
+use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
 use super::{Class, Classifier, FrameInput};
 use crate::reflect::BoundedPlane;
 
@@ -80,10 +80,10 @@ impl PlaneMapClassifier {
     /// The beam test of every point against the map planes (sensor frame),
     /// as [`Classifier::classify`] runs it; pass it in
     /// [`FrameInput::beam_hits`] to run it only once per frame.
-    pub fn beam_hits(&self, input: &FrameInput<'_>) -> Vec<Option<BeamHit>> {
+    pub fn beam_hits(&self, input: &FrameInput<'_>) -> BeamHits {
         let planes = Self::planes_in_sensor_frame(input);
         let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
-        beam_hits(
+        BeamHits::compute(
             input.frame,
             input.scan,
             &beams,
@@ -95,17 +95,20 @@ impl PlaneMapClassifier {
     /// of it, by the beam test `hits` ([`PlaneMapClassifier::beam_hits`]):
     /// the frame's observed ordinary surfaces (Normal by the beam test
     /// alone), used to build the sequence's surface support.
-    pub fn surface_points(&self, input: &FrameInput<'_>, hits: &[Option<BeamHit>]) -> Vec<u32> {
+    pub fn surface_points(&self, input: &FrameInput<'_>, hits: &BeamHits) -> Vec<u32> {
+        let planes = Self::planes_in_sensor_frame(input);
         let glass = self.params.decision.glass_distance;
         input
             .frame
             .points
             .iter()
-            .zip(hits)
             .enumerate()
-            .filter(|(_, (pt, hit))| match hit {
-                None => true,
-                Some(h) => pt.position().coords.norm() < h.range - glass,
+            .filter(|(i, pt)| {
+                let p = pt.position();
+                match hits.get(*i, &p, &planes) {
+                    None => true,
+                    Some(h) => p.coords.norm() < h.range - glass,
+                }
             })
             .map(|(i, _)| i as u32)
             .collect()

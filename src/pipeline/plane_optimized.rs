@@ -20,7 +20,7 @@ use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{
-    BeamHit, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport,
+    BeamHits, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport,
 };
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
@@ -141,7 +141,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     // The beam test of every frame, shared by the support and the
     // classification when the support needs it.
     let start = Instant::now();
-    let hits: Vec<Vec<Option<BeamHit>>> = if classifier.params().sequence_support {
+    let hits: Vec<BeamHits> = if classifier.params().sequence_support {
         (0..sequence.len())
             .into_par_iter()
             .map(|k| classifier.beam_hits(&input(k)))
@@ -164,7 +164,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
                 support: support.as_ref(),
-                beam_hits: hits.get(k).map(Vec::as_slice),
+                beam_hits: hits.get(k),
                 ..input(k)
             });
             bar.inc(1);
@@ -234,7 +234,7 @@ pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> 
 fn sequence_support<'a>(
     classifier: &PlaneMapClassifier,
     frames: &[usize],
-    hits: &[Vec<Option<BeamHit>>],
+    hits: &[BeamHits],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
 ) -> WorldSupport {
     // Indices only (4 bytes a point): the world points are made as the
