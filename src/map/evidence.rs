@@ -185,8 +185,18 @@ fn vote_frame(
     let origin = Point3::origin();
     let cos_peak = p.peak_angle_deg.to_radians().cos();
     let mut votes = Votes::default();
+    // A point on the sensor's side of the plane lies at least its distance
+    // from the plane in front of the crossing along its beam (|r - t| >=
+    // |n·x + d|): farther than the surface band it casts no vote, which one
+    // dot product tells without the crossing (the 1e-9 covers round-off).
+    let d = plane.plane.d;
+    let skip_front = p.behind >= 0.0;
     for (i, pt) in f.frame.points.iter().enumerate() {
         let x = pt.position();
+        let sd = plane.plane.signed_distance(&x);
+        if skip_front && sd * d > 0.0 && sd.abs() > p.surface_band + 1e-9 {
+            continue;
+        }
         let r = x.coords.norm();
         if !(r > 0.0) {
             continue;

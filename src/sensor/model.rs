@@ -122,7 +122,14 @@ impl SensorModel {
     pub fn column_of(&self, x: f64, y: f64) -> usize {
         let deg = 180.0 + crate::geometry::fastmath::fast_atan2(y, x).to_degrees();
         let c = crate::geometry::fastmath::round_i64(deg / self.column_step_deg());
-        c.rem_euclid(self.columns as i64) as usize
+        let n = self.columns as i64;
+        // `deg` lies in [0, 360], so `c` in [0, n] but for rounding: wrap
+        // without an integer division where it can.
+        match c {
+            c if (0..n).contains(&c) => c as usize,
+            c if c == n => 0,
+            c => c.rem_euclid(n) as usize,
+        }
     }
 
     /// Azimuth (degrees, atan2 convention) of the centre of a column.
