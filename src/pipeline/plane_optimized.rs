@@ -12,7 +12,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 use rayon::prelude::*;
 
 use super::registry::{detector, merger, plane_map_classifier};
@@ -246,10 +246,11 @@ fn sequence_support<'a>(
     let params = classifier.params();
     let points = frames.iter().zip(&per_frame).flat_map(|(&k, indices)| {
         let inp = input(k);
-        let (pose, points) = (inp.pose, &inp.frame.points);
+        let (r, t) = rotation_translation(&inp.pose);
+        let points = &inp.frame.points;
         indices
             .iter()
-            .map(move |&i| pose * points[i as usize].position())
+            .map(move |&i| Point3::from(r * points[i as usize].position().coords + t))
     });
     WorldSupport::build(points, params.support_voxel, params.decision.support_radius)
 }
@@ -285,7 +286,7 @@ pub fn around_corner_map(
     let mut thin = Thinning::new(voxel);
     for (k, mirrored) in mirrored.iter().enumerate() {
         let pose = poses[k];
-        let (r, t) = (pose.rotation.to_rotation_matrix().into_inner(), pose.translation.vector);
+        let (r, t) = rotation_translation(&pose);
         for (pt, &class) in sequence.frames[k].points.iter().zip(&classes[k]) {
             if matches!(class, Class::Normal | Class::Glass | Class::Obstacle) {
                 thin.offer(Point3::from(r * pt.position().coords + t), class, false);
@@ -315,6 +316,15 @@ pub fn measured_map(sequence: &Sequence, classes: &[Vec<Class>], voxel: f64) -> 
         }
     }
     thin.kept
+}
+
+/// A pose as rotation matrix and translation: applied to every point of a
+/// frame, the matrix is cheaper than the quaternion.
+fn rotation_translation(pose: &Isometry3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
+    (
+        pose.rotation.to_rotation_matrix().into_inner(),
+        pose.translation.vector,
+    )
 }
 
 /// Keeps the first point offered per (voxel, class, mirrored); a voxel of 0
