@@ -6,6 +6,13 @@ mod cli;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
+    if let Some(missing) = missing_cpu_feature() {
+        eprintln!(
+            "error: this build of specular needs an x86-64-v2 CPU, and this one lacks {missing}; \
+             rebuild with RUSTFLAGS=\"-C target-cpu=x86-64\" (see .cargo/config.toml)"
+        );
+        return std::process::ExitCode::FAILURE;
+    }
     match cli::run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
@@ -13,4 +20,19 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The first CPU feature the build was compiled for that this CPU lacks
+/// (see `.cargo/config.toml`), so an old CPU gets a message, not SIGILL.
+fn missing_cpu_feature() -> Option<&'static str> {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse4.2"))]
+    {
+        if !std::is_x86_feature_detected!("sse4.2") {
+            return Some("SSE4.2");
+        }
+        if !std::is_x86_feature_detected!("popcnt") {
+            return Some("POPCNT");
+        }
+    }
+    None
 }

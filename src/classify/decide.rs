@@ -28,8 +28,8 @@ use serde::{Deserialize, Serialize};
 
 use super::boundary::{beam_crossing, BeamPlanes};
 use super::Class;
-use crate::reflect::BoundedPlane;
 use crate::cloud::Frame;
+use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
 
 /// Thresholds and switches of the decision procedure.
@@ -143,7 +143,12 @@ const NO_PLANE: u32 = u32::MAX;
 impl BeamHits {
     /// The first crossings of `planes` up to `reach` beyond each point of
     /// `frame` ([`BeamPlanes::first_hit`]).
-    pub fn compute(frame: &Frame, scan: &OrganizedScan, planes: &BeamPlanes<'_>, reach: f64) -> Self {
+    pub fn compute(
+        frame: &Frame,
+        scan: &OrganizedScan,
+        planes: &BeamPlanes<'_>,
+        reach: f64,
+    ) -> Self {
         let columns = scan.columns();
         let planes = planes.clone().with_reach(reach);
         let first = frame

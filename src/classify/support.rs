@@ -134,7 +134,8 @@ impl WorldSupport {
                     let Some(&b) = self.buckets.get(&bucket_key([cx, cy, cz])) else {
                         continue;
                     };
-                    let range = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
+                    let range =
+                        self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
                     if self.points[range].iter().any(|b| {
                         let (x, y, z) = (b[0] - q[0], b[1] - q[1], b[2] - q[2]);
                         x * x + y * y + z * z <= r2

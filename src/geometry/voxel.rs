@@ -154,8 +154,8 @@ impl VoxelSet {
                 base
             }
         };
-        let bit = ((k[0] & (BRICK - 1)) | (k[1] & (BRICK - 1)) << 3 | (k[2] & (BRICK - 1)) << 6)
-            as usize;
+        let bit =
+            ((k[0] & (BRICK - 1)) | (k[1] & (BRICK - 1)) << 3 | (k[2] & (BRICK - 1)) << 6) as usize;
         let word = &mut self.bits[base + (bit >> 6)];
         let mask = 1u64 << (bit & 63);
         let new = *word & mask == 0;

@@ -50,7 +50,12 @@ impl RunOutput {
         }
         let mut c = Confusion::default();
         for (f, out) in sequence.frames.iter().zip(&self.frames) {
-            c.add_pairs(f.points.iter().map(|p| p.label).zip(out.classes.iter().copied()));
+            c.add_pairs(
+                f.points
+                    .iter()
+                    .map(|p| p.label)
+                    .zip(out.classes.iter().copied()),
+            );
         }
         Some(c)
     }

@@ -19,9 +19,7 @@ use super::registry::{detector, merger, plane_map_classifier};
 use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::mirror::mirror_reflections;
-use crate::classify::{
-    BeamHits, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport,
-};
+use crate::classify::{BeamHits, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
@@ -345,7 +343,11 @@ impl Thinning {
     #[inline]
     fn offer(&mut self, p: Point3<f64>, class: Class, mirrored: bool) {
         let tag = (class.id() & 0x7) | (mirrored as u8) << 3;
-        if self.seen.as_mut().is_none_or(|s| s.insert([p.x, p.y, p.z], tag)) {
+        if self
+            .seen
+            .as_mut()
+            .is_none_or(|s| s.insert([p.x, p.y, p.z], tag))
+        {
             self.kept.push(MapPoint {
                 xyz: [p.x as f32, p.y as f32, p.z as f32],
                 class,
