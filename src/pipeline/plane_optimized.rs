@@ -136,25 +136,23 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         support: None,
         beam_hits: None,
     };
-    // The beam test of every frame, shared by the support and the
-    // classification when the support needs it.
-    let start = Instant::now();
-    let hits: Vec<BeamHits> = if classifier.params().sequence_support {
-        (0..sequence.len())
+    // The sequence's surface support, when used: the beam test of every
+    // frame (shared with the classification), then the surfaces it found.
+    let mut hits: Vec<BeamHits> = Vec::new();
+    let mut support = None;
+    if classifier.params().sequence_support {
+        let start = Instant::now();
+        hits = (0..sequence.len())
             .into_par_iter()
             .map(|k| classifier.beam_hits(&input(k)))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    timings.add("beam test", start.elapsed());
-    let start = Instant::now();
-    let support = classifier.params().sequence_support.then(|| {
+            .collect();
+        timings.add("beam test", start.elapsed());
+        let start = Instant::now();
         let p = classifier.params();
         let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
-        sequence_support(&classifier, &views, &hits, &input)
-    });
-    timings.add("support", start.elapsed());
+        support = Some(sequence_support(&classifier, &views, &hits, &input));
+        timings.add("support", start.elapsed());
+    }
     let bar = crate::progress::bar(sequence.len(), "classify");
     let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
         .into_par_iter()
