@@ -224,4 +224,61 @@ mod tests {
         assert!(!w.contains(3, 20, 600));
         assert!(!w.contains(5, 0, 600));
     }
+
+    /// A beam test kept as plane indices gives back the crossing range of
+    /// `first_hit` bit for bit (the decision compares it with the point's
+    /// range), on random points against two overlapping squares.
+    #[test]
+    fn beam_hits_give_back_first_hit_exactly() {
+        use crate::classify::decide::BeamHits;
+        use crate::cloud::{Frame, Point};
+        use crate::sensor::{OrganizedScan, SensorModel};
+        let square = |x: f64, tilt: f64| {
+            let plane = Plane::new(Vector3::new(-1.0, tilt, 0.0).normalize(), x).unwrap();
+            let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+            BoundedPlane::from_points(
+                plane,
+                corners
+                    .iter()
+                    .map(|&(y, z)| plane.project(&Point3::new(x, y, z))),
+            )
+        };
+        let planes = vec![square(2.0, 0.1), square(3.0, -0.2)];
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let points: Vec<Point> = (0..2000)
+            .map(|_| Point {
+                xyz: [
+                    (rng.unit() * 6.0 - 1.0) as f32,
+                    (rng.unit() * 3.0 - 1.5) as f32,
+                    (rng.unit() * 1.0 - 0.5) as f32,
+                ],
+                intensity: 10.0,
+                ring: 0,
+                ret: 1,
+                label: 1,
+            })
+            .collect();
+        let frame = Frame {
+            name: "random".into(),
+            points,
+            ..Frame::default()
+        };
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let beams = BeamPlanes::hulls(&planes, 0.05);
+        let hits = BeamHits::compute(&frame, &scan, &beams, 0.1);
+        let reach = beams.clone().with_reach(0.1);
+        let mut crossed = 0;
+        for (i, pt) in frame.points.iter().enumerate() {
+            let p = pt.position();
+            let expected = reach.first_hit(&p, None);
+            let got = hits.get(i, &p, &planes).map(|h| (h.plane, h.range));
+            assert_eq!(
+                got.map(|(k, t)| (k, t.to_bits())),
+                expected.map(|(k, t)| (k, t.to_bits()))
+            );
+            crossed += expected.is_some() as usize;
+        }
+        assert!(crossed > 100, "too few beams cross a plane: {crossed}");
+    }
 }

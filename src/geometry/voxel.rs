@@ -1,8 +1,8 @@
-//! Voxel keys and a fast, deterministic voxel set for thinning point sets.
+//! Voxel keys, the Fx hash and a fast, deterministic voxel set for thinning
+//! point sets.
 
 use super::fastmath::floor_i64;
 
-use std::collections::HashSet;
 use std::hash::{BuildHasherDefault, Hasher};
 
 /// The integer voxel of `p` for cubes of edge `size`.
@@ -14,16 +14,6 @@ pub fn voxel_key(p: [f64; 3], size: f64) -> [i64; 3] {
         floor_i64(p[1] * inv),
         floor_i64(p[2] * inv),
     ]
-}
-
-/// `voxel_key` packed into one `u64` (21 bits per axis, two's complement),
-/// exact for voxel indices within ±2^20 (±52 km at 5 cm voxels); beyond that
-/// distinct voxels may share a key, which only thins a little more.
-#[inline]
-pub fn packed_voxel_key(p: [f64; 3], size: f64) -> u64 {
-    let k = voxel_key(p, size);
-    let m = (1u64 << 21) - 1;
-    ((k[0] as u64) & m) | (((k[1] as u64) & m) << 21) | (((k[2] as u64) & m) << 42)
 }
 
 /// The Fx hash (as used inside rustc): a multiply-rotate hash, much faster
@@ -78,9 +68,6 @@ impl Hasher for FxHasher {
         self.hash.rotate_left(26)
     }
 }
-
-/// A hash set with the Fx hash.
-pub type FxHashSet<T> = HashSet<T, BuildHasherDefault<FxHasher>>;
 
 /// A hash map with the Fx hash.
 pub type FxHashMap<K, V> = std::collections::HashMap<K, V, BuildHasherDefault<FxHasher>>;
@@ -178,6 +165,7 @@ impl VoxelSet {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+    use std::collections::HashSet;
 
     proptest! {
         /// The brick set agrees with a plain set of (voxel, tag) keys.

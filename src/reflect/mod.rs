@@ -238,4 +238,51 @@ mod tests {
             "undecided: the hull"
         );
     }
+
+    /// `extent_2d` never excludes a point that `bounds` accepts: with the
+    /// hull alone, with transparent evidence beyond the hull, and with
+    /// panes, for margins 0 and 0.2, over a grid of plane points.
+    #[test]
+    fn the_chart_extent_holds_every_bounded_point() {
+        let mut with_evidence = square();
+        let uv = |y: f64, z: f64| with_evidence.chart.to_2d(&Point3::new(2.0, y, z));
+        let (a, b) = (uv(-2.0, -2.0), uv(3.0, 3.0));
+        let lo = Point2::new(a.x.min(b.x), a.y.min(b.y));
+        let hi = Point2::new(a.x.max(b.x), a.y.max(b.y));
+        let mut grid = EvidenceGrid::new(lo, hi, 0.1, 1, 100_000).unwrap();
+        grid.vote(&uv(2.5, 0.5), 5, 0);
+        grid.finalize();
+        with_evidence.evidence = Some(Arc::new(grid));
+        let mut with_panes = square();
+        let pane = |y0: f64, y1: f64| {
+            let (p, q) = (with_panes.chart.to_2d(&Point3::new(2.0, y0, 0.0)), {
+                with_panes.chart.to_2d(&Point3::new(2.0, y1, 0.4))
+            });
+            crate::geometry::ConvexPolygon::rectangle(
+                Point2::new(p.x.min(q.x), p.y.min(q.y)),
+                Point2::new(p.x.max(q.x), p.y.max(q.y)),
+            )
+        };
+        with_panes.panes = Some(Arc::new(vec![pane(-1.0, -0.5), pane(1.5, 2.5)]));
+        for bp in [square(), with_evidence, with_panes] {
+            for margin in [0.0, 0.2] {
+                let (lo, hi) = bp.extent_2d(margin);
+                let mut accepted = 0;
+                for i in -40..=40 {
+                    for j in -40..=40 {
+                        let q = Point3::new(2.0, i as f64 * 0.1, j as f64 * 0.1);
+                        if bp.bounds(&q, margin) {
+                            accepted += 1;
+                            let uv = bp.chart.to_2d(&q);
+                            assert!(
+                                uv.x >= lo.x && uv.x <= hi.x && uv.y >= lo.y && uv.y <= hi.y,
+                                "{q} is bounded but outside the extent"
+                            );
+                        }
+                    }
+                }
+                assert!(accepted > 0);
+            }
+        }
+    }
 }
