@@ -2,7 +2,8 @@
 //! parsing, the plane-optimized pipeline and every output file.
 //!
 //! `cargo bench --bench detect [-- DIR [RUNS]]` (or `SPECULAR_DATA=DIR`;
-//! default the ten shared 3DRef frames, 15 runs). Each run is the release
+//! default the ten shared 3DRef frames when present, else the bundled
+//! sample; 15 runs). Each run is the release
 //! binary as a user runs it, `detect --frames DIR --poses DIR/hesai_pose.txt
 //! --lean --timings`, with one worker thread (`RAYON_NUM_THREADS=1`) and,
 //! where `taskset` exists, pinned to one CPU. The runs of the configurations
@@ -22,16 +23,28 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
+    let shared = PathBuf::from("/work/shared/data/3dref-seq1-demo");
+    let bundled = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("datasets/3dref-sample");
     let dir = args
         .first()
         .cloned()
         .or_else(|| std::env::var("SPECULAR_DATA").ok())
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/data/3dref-seq1-demo"));
+        .unwrap_or(if shared.is_dir() { shared } else { bundled });
     let runs: usize = args.get(1).and_then(|r| r.parse().ok()).unwrap_or(15);
-    let poses = dir.join("hesai_pose.txt");
-    if !poses.is_file() {
-        eprintln!("detect bench: {} not found", poses.display());
+    // The 3DRef release layout (frames and `hesai_pose.txt` together) or
+    // the bundled sample's (`frames/`, `poses.txt`).
+    let (dir, poses) = if dir.join("hesai_pose.txt").is_file() {
+        (dir.clone(), dir.join("hesai_pose.txt"))
+    } else {
+        (dir.join("frames"), dir.join("poses.txt"))
+    };
+    if !poses.is_file() || !dir.is_dir() {
+        eprintln!(
+            "detect bench: no frames and poses at {} ({} expected)",
+            dir.display(),
+            poses.display()
+        );
         std::process::exit(1);
     }
     let out = std::env::temp_dir().join(format!("specular-detect-bench-{}", std::process::id()));
