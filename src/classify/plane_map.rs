@@ -2,13 +2,12 @@
 //! planes of the global map, with the map's fused hull boundaries and,
 //! beyond the paper, the observed surfaces of all frames as mirror support.
 
-use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
 use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
 use super::{Class, Classifier, FrameInput};
-use crate::reflect::BoundedPlane;
+use crate::reflect::{planes_seen_from, BoundedPlane};
 
 /// Parameters of the plane-map classifier.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -68,13 +67,7 @@ impl PlaneMapClassifier {
 
     /// The map planes in the frame's sensor frame, facing the sensor.
     pub fn planes_in_sensor_frame(input: &FrameInput<'_>) -> Vec<BoundedPlane> {
-        let to_sensor = input.pose.inverse();
-        let origin = Point3::origin();
-        input
-            .map_planes
-            .iter()
-            .map(|bp| bp.transformed(&to_sensor).facing(&origin))
-            .collect()
+        planes_seen_from(input.map_planes, &input.pose)
     }
 
     /// The beam test of every point against the map planes (sensor frame),

@@ -24,7 +24,7 @@ use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
-use crate::reflect::{BoundedPlane, Detection};
+use crate::reflect::{planes_seen_from, BoundedPlane, Detection};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
@@ -269,12 +269,7 @@ pub fn around_corner_map(
     let mirrored: Vec<Vec<(usize, Point3<f64>)>> = (0..sequence.len().min(classes.len()))
         .into_par_iter()
         .map(|k| {
-            let to_sensor = poses[k].inverse();
-            let origin = Point3::origin();
-            let planes: Vec<BoundedPlane> = map_planes
-                .iter()
-                .map(|bp| bp.transformed(&to_sensor).facing(&origin))
-                .collect();
+            let planes = planes_seen_from(map_planes, &poses[k]);
             mirror_reflections(&sequence.frames[k], &classes[k], &planes, hull_margin)
         })
         .collect();

@@ -156,6 +156,17 @@ impl BoundedPlane {
     }
 }
 
+/// World-frame bounded planes as seen from a sensor with pose `pose`
+/// (`T_world_sensor`): in the sensor frame, each facing the sensor.
+pub fn planes_seen_from(planes: &[BoundedPlane], pose: &Isometry3<f64>) -> Vec<BoundedPlane> {
+    let to_sensor = pose.inverse();
+    let origin = Point3::origin();
+    planes
+        .iter()
+        .map(|bp| bp.transformed(&to_sensor).facing(&origin))
+        .collect()
+}
+
 /// One reflective plane found in a scan (sensor frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReflectivePlane {

@@ -27,7 +27,7 @@ use nalgebra::{Isometry3, Point3};
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::Class;
 use crate::pipeline::Sequence;
-use crate::reflect::BoundedPlane;
+use crate::reflect::{planes_seen_from, BoundedPlane};
 use crate::{Error, Result};
 
 /// The world frame's id in the recording.
@@ -143,13 +143,7 @@ fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<
         cloud.log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
 
         // Reflections mirrored back (through the planes seen from this pose).
-        let to_sensor = pose.inverse();
-        let origin = Point3::origin();
-        let local: Vec<BoundedPlane> = run
-            .planes
-            .iter()
-            .map(|bp| bp.transformed(&to_sensor).facing(&origin))
-            .collect();
+        let local = planes_seen_from(&run.planes, &pose);
         let back = mirror_reflections(frame, classes, &local, run.hull_margin);
         let mut data = Vec::with_capacity(back.len() * MIRRORED_STRIDE as usize);
         for (_, q) in &back {
