@@ -87,6 +87,15 @@ pub struct MapParams {
     /// Landmarks observed fewer times are not used for classification
     /// (paper: 10).
     pub min_observations: usize,
+    /// Landmarks found in fewer than this share of the frames that had them
+    /// in view (front side, within `visibility_range`) are not used: chance
+    /// alignments of reflections or of points behind glass are fitted now
+    /// and then, a real pane in most frames that see it (0: no test, the
+    /// paper).
+    pub min_found_ratio: f64,
+    /// Distance from a landmark's boundary within which a frame counts as
+    /// having it in view, m.
+    pub visibility_range: f64,
     /// Matching and weighting thresholds.
     pub merge: MergeParams,
     /// How reflective landmarks are bounded.
@@ -97,11 +106,24 @@ pub struct MapParams {
     pub panes: PaneParams,
 }
 
+impl MapParams {
+    /// The landmark selection these parameters describe.
+    pub fn selection(&self) -> crate::map::LandmarkSelection {
+        crate::map::LandmarkSelection {
+            min_observations: self.min_observations,
+            min_found_ratio: self.min_found_ratio,
+            visibility_range: self.visibility_range,
+        }
+    }
+}
+
 impl Default for MapParams {
     fn default() -> Self {
         Self {
             merger: MergerName::WeightedAverage,
             min_observations: 10,
+            min_found_ratio: 0.0,
+            visibility_range: 10.0,
             merge: MergeParams::default(),
             boundary: BoundaryMode::Hull,
             evidence: EvidenceParams::default(),

@@ -94,10 +94,10 @@ pub fn run(args: DetectArgs) -> Result<()> {
     );
     if let Some(map) = &map {
         println!(
-            "plane map: {} landmarks, {} used (observed at least {} times); planes.json, around_corner.ply",
+            "plane map: {} landmarks, {} used ({}); planes.json, around_corner.ply",
             map.map.landmarks.len(),
             map.used.len(),
-            config.map.min_observations
+            config.map.selection()
         );
     }
     if let Some(conf) = confusion {

@@ -111,10 +111,10 @@ pub(crate) fn write_visual(
     )];
     if let Some(m) = map {
         summary.push(format!(
-            "plane map: {} landmarks, {} used (observed at least {} times)",
+            "plane map: {} landmarks, {} used ({})",
             m.map.landmarks.len(),
             m.used.len(),
-            config.map.min_observations
+            config.map.selection()
         ));
     }
     let report = Report {

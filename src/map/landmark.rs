@@ -1,6 +1,6 @@
 //! Landmarks and the map that holds them.
 
-use nalgebra::Point3;
+use nalgebra::{Isometry3, Point3};
 
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
 use crate::io::{PlaneKind, PlaneRecord};
@@ -63,6 +63,39 @@ impl Landmark {
         self.bounded().boundary.area()
     }
 
+    /// Frames of `poses` (`T_world_sensor`) that had this landmark in view:
+    /// the sensor on its front side and within `range` metres of its
+    /// boundary. Occlusion is not modelled, so this is an upper bound.
+    pub fn frames_in_view(&self, poses: &[Isometry3<f64>], range: f64) -> usize {
+        let bounded = self.bounded();
+        poses
+            .iter()
+            .filter(|pose| {
+                let o = Point3::from(pose.translation.vector);
+                let s = self.plane.signed_distance(&o);
+                if !(s > 0.0) || s > range {
+                    return false;
+                }
+                let across = bounded.boundary.signed_distance(&bounded.chart.to_2d(&o));
+                s * s + across.max(0.0).powi(2) <= range * range
+            })
+            .count()
+    }
+
+    /// Share of the frames that had the landmark in view
+    /// ([`Landmark::frames_in_view`]) in which it was detected: a surface
+    /// that is really there is found in a good share of the frames that
+    /// see it, a plane fitted to a chance alignment of points (a reflection,
+    /// points behind glass) only now and then. ORB-SLAM culls map points by
+    /// the same found-over-visible ratio.
+    pub fn found_ratio(&self, poses: &[Isometry3<f64>], range: f64) -> f64 {
+        let in_view = self.frames_in_view(poses, range).max(self.observations);
+        if in_view == 0 {
+            return 0.0;
+        }
+        self.observations as f64 / in_view as f64
+    }
+
     /// The `planes.json` record, with frame names from `frame_names`; the
     /// boundary and panes are taken from `bounded` (this landmark as used for
     /// classification, e.g. with panes fitted).
@@ -111,6 +144,33 @@ pub fn hull_on_plane(
         .collect()
 }
 
+/// Which landmarks of a fused map are trusted.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandmarkSelection {
+    /// Fewest observations.
+    pub min_observations: usize,
+    /// Smallest found-over-in-view ratio ([`Landmark::found_ratio`]); 0
+    /// disables the test.
+    pub min_found_ratio: f64,
+    /// A landmark is in view within this distance of its boundary, m.
+    pub visibility_range: f64,
+}
+
+impl std::fmt::Display for LandmarkSelection {
+    /// "observed at least N times[, found in at least P% of the frames in view]".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "observed at least {} times", self.min_observations)?;
+        if self.min_found_ratio > 0.0 {
+            write!(
+                f,
+                ", found in at least {}% of the frames in view",
+                self.min_found_ratio * 100.0
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// The global plane map.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PlaneMap {
@@ -129,6 +189,22 @@ impl PlaneMap {
         self.landmarks
             .iter()
             .filter(move |l| l.observations >= min_observations)
+    }
+
+    /// Indices of the landmarks that pass `selection` for a sequence with
+    /// `poses`: observed often enough, and found in a large enough share of
+    /// the frames that had them in view.
+    pub fn reliable(&self, poses: &[Isometry3<f64>], selection: &LandmarkSelection) -> Vec<usize> {
+        self.landmarks
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| l.observations >= selection.min_observations)
+            .filter(|(_, l)| {
+                selection.min_found_ratio <= 0.0
+                    || l.found_ratio(poses, selection.visibility_range) >= selection.min_found_ratio
+            })
+            .map(|(i, _)| i)
+            .collect()
     }
 
     /// An id no landmark of the map has (ids stay unique when landmarks are

@@ -12,6 +12,6 @@ pub mod merge;
 pub mod panes;
 
 pub use evidence::{gather_evidence, EvidenceFrame, EvidenceParams};
-pub use landmark::{Landmark, PlaneMap, PlaneObservation};
+pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};

@@ -80,13 +80,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
             merger.merge(&mut map, &obs);
         }
     }
-    let used: Vec<usize> = map
-        .landmarks
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| l.observations >= config.map.min_observations)
-        .map(|(i, _)| i)
-        .collect();
+    let used = map.reliable(poses, &config.map.selection());
     let mut map_planes: Vec<BoundedPlane> =
         used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
