@@ -41,6 +41,11 @@ pub struct EvidenceGrid {
     /// A transparent region whose echo votes are fewer than this share of
     /// its transparent votes is an opening ([`Surface::Open`]).
     pub min_echo_fraction: f64,
+    /// A transparent cell farther than this from every cell with a surface
+    /// echo is open space, m (0: no bound): beams pass the infinite plane
+    /// far from the surface that echoed, e.g. a small mirror's plane
+    /// continued across a hall.
+    pub echo_reach: f64,
     /// Votes needed (over a cell and its 8 neighbours) to decide.
     pub min_votes: u32,
     /// Single echoes on the plane brighter than this are from an opaque
@@ -81,6 +86,7 @@ impl EvidenceGrid {
             echo: vec![0; cols * rows],
             open: vec![0; cols * rows],
             min_echo_fraction: 0.0,
+            echo_reach: 0.0,
             min_votes,
             opaque_intensity: None,
             peak_cos: 1.0,
@@ -130,6 +136,15 @@ impl EvidenceGrid {
     pub fn finalize(&mut self) {
         let n = self.cols * self.rows;
         self.states = (0..n).map(|k| self.vote_state(k)).collect();
+        if self.echo_reach > 0.0 {
+            let reach = (self.echo_reach / self.cell).round() as usize;
+            let near = self.near_echo(reach);
+            for (state, near) in self.states.iter_mut().zip(near) {
+                if *state == Surface::Transparent && !near {
+                    *state = Surface::Open;
+                }
+            }
+        }
         for region in self.regions(Surface::Transparent) {
             let t: u64 = region.iter().map(|&k| self.transparent[k] as u64).sum();
             let e: u64 = region.iter().map(|&k| self.echo[k] as u64).sum();
@@ -139,6 +154,34 @@ impl EvidenceGrid {
                 }
             }
         }
+    }
+
+    /// Per cell, whether a cell with a surface echo lies within `reach`
+    /// cells in both directions (a square window, counted with a summed-area
+    /// table).
+    fn near_echo(&self, reach: usize) -> Vec<bool> {
+        let (cols, rows) = (self.cols, self.rows);
+        let mut sum = vec![0u32; (cols + 1) * (rows + 1)];
+        for j in 0..rows {
+            for i in 0..cols {
+                let e = (self.echo[j * cols + i] > 0) as u32;
+                sum[(j + 1) * (cols + 1) + i + 1] =
+                    e + sum[j * (cols + 1) + i + 1] + sum[(j + 1) * (cols + 1) + i]
+                        - sum[j * (cols + 1) + i];
+            }
+        }
+        let mut out = Vec::with_capacity(cols * rows);
+        for j in 0..rows {
+            let (y0, y1) = (j.saturating_sub(reach), (j + reach + 1).min(rows));
+            for i in 0..cols {
+                let (x0, x1) = (i.saturating_sub(reach), (i + reach + 1).min(cols));
+                let total = sum[y1 * (cols + 1) + x1] + sum[y0 * (cols + 1) + x0]
+                    - sum[y0 * (cols + 1) + x1]
+                    - sum[y1 * (cols + 1) + x0];
+                out.push(total > 0);
+            }
+        }
+        out
     }
 
     /// The 8-connected regions of cells in `state`, each sorted, ordered by

@@ -56,6 +56,9 @@ pub struct EvidenceParams {
     /// A transparent region with fewer surface echoes than this share of its
     /// transparent votes is an opening, not glass.
     pub min_echo_fraction: f64,
+    /// Transparent cells farther than this from any surface echo are open
+    /// space, not glass, m (0: no bound).
+    pub echo_reach: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
 }
@@ -73,6 +76,7 @@ impl Default for EvidenceParams {
             peak_angle_deg: 5.0,
             weak_single_echo_votes: false,
             min_echo_fraction: 0.0,
+            echo_reach: 0.0,
             max_cells: 4_000_000,
         }
     }
@@ -114,6 +118,7 @@ pub fn gather_evidence(
         params.max_cells,
     )?;
     empty.min_echo_fraction = params.min_echo_fraction;
+    empty.echo_reach = params.echo_reach;
     let partial: Vec<(EvidenceGrid, Votes)> = frames
         .par_iter()
         .map(|f| {

@@ -65,6 +65,11 @@ pub struct DetectorParams {
     pub cluster_link: f64,
     /// Minimum cluster size kept for the boundary.
     pub min_cluster: usize,
+    /// ... and of at least this share of the plane's inliers: a RANSAC plane
+    /// collects every candidate within its band along the whole infinite
+    /// plane, and stray groups far from the surface would stretch its hull
+    /// (0: no relative bound).
+    pub min_cluster_fraction: f64,
 }
 
 impl Default for DetectorParams {
@@ -80,6 +85,7 @@ impl Default for DetectorParams {
             intensity_peak: IntensityPeakParams::default(),
             cluster_link: 0.0,
             min_cluster: 1,
+            min_cluster_fraction: 0.0,
         }
     }
 }
@@ -161,7 +167,10 @@ impl CandidateRansacDetector {
         inliers
             .iter()
             .zip(&labels)
-            .filter(|(_, &l)| sizes[l] >= p.min_cluster)
+            .filter(|(_, &l)| {
+                sizes[l] >= p.min_cluster
+                    && sizes[l] as f64 >= p.min_cluster_fraction * inliers.len() as f64
+            })
             .map(|(&i, _)| i)
             .collect()
     }
