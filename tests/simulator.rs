@@ -556,6 +556,9 @@ fn builtin_scenes_build_and_benchmark_scenes_are_long_enough() {
         let frames = Scene::resolve(name).unwrap().frames;
         assert!(frames >= 600, "{name}: {frames} frames");
     }
+    // The glass-lined corridor loop of the behind-the-glass benchmark.
+    let frames = Scene::resolve("glass-loop").unwrap().frames;
+    assert!(frames >= 1000, "glass-loop: {frames} frames");
     let e = Scene::resolve("no-such-scene").unwrap_err().to_string();
     assert!(e.contains("office") && e.contains("no-such-scene"), "{e}");
 }
@@ -704,4 +707,27 @@ fn every_reflective_plane_is_seen_from_the_side_its_normal_faces() {
         }
     }
     assert!(checked > 10_000, "{checked}");
+}
+
+/// The benchmark trajectories turn the sensor gradually: no frame-to-frame
+/// heading change above 20 degrees (200 deg/s at 10 Hz, a brisk turn of a
+/// hand-pushed trolley; the old corridor turned 180 degrees in one frame at
+/// its far end), and no frame moves more than 0.2 m.
+#[test]
+fn benchmark_trajectories_turn_and_move_smoothly() {
+    for name in ["office", "corridor", "mirror-room", "lobby", "glass-loop"] {
+        let scene = Scene::resolve(name).unwrap();
+        let sim = Simulator::new(&scene);
+        let (mut max_turn, mut max_step) = (0.0f64, 0.0f64);
+        for k in 1..scene.frames {
+            let rel = sim.pose(k - 1).pose.inverse() * sim.pose(k).pose;
+            max_turn = max_turn.max(rel.rotation.angle().to_degrees());
+            max_step = max_step.max(rel.translation.vector.norm());
+        }
+        assert!(
+            max_turn < 20.0,
+            "{name}: turns {max_turn:.1} deg in one frame"
+        );
+        assert!(max_step < 0.2, "{name}: moves {max_step:.2} m in one frame");
+    }
 }

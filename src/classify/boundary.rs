@@ -189,6 +189,36 @@ impl<'a> BeamPlanes<'a> {
     }
 }
 
+impl BeamPlanes<'_> {
+    /// Whether the beam towards `p` crosses a plane other than `skip` inside
+    /// its boundary at a range strictly between `lo` and `hi`: a beam that
+    /// passed one pane and met a second before its return (glass behind
+    /// glass, glass then mirror).
+    pub fn crosses_between(&self, p: &Point3<f64>, skip: usize, lo: f64, hi: f64) -> bool {
+        let range = p.coords.norm();
+        if !(range > 0.0) || !(hi > lo) {
+            return false;
+        }
+        let dir: Vector3<f64> = p.coords / range;
+        let origin = Point3::origin();
+        self.planes.iter().enumerate().any(|(k, bp)| {
+            if k == skip {
+                return false;
+            }
+            let Some(t) = crossing_along(&bp.plane, &dir) else {
+                return false;
+            };
+            if !(t > lo && t < hi) {
+                return false;
+            }
+            let uv = bp.chart.to_2d(&(origin + dir * t));
+            let (a, b) = self.extents.get(k).copied().unwrap_or((uv, uv));
+            let boxed = uv.x >= a.x && uv.x <= b.x && uv.y >= a.y && uv.y <= b.y;
+            boxed && bp.bounds_2d(&uv, self.margin)
+        })
+    }
+}
+
 /// Range at which the beam from the sensor origin through `p` crosses
 /// `plane` (`None` when parallel or behind the sensor): the same arithmetic
 /// as [`BeamPlanes::first_hit`], so the same value bit for bit.

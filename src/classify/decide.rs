@@ -27,6 +27,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::boundary::{beam_crossing, BeamPlanes};
+use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
 use crate::reflect::BoundedPlane;
@@ -76,6 +77,21 @@ pub struct DecisionParams {
     /// A single echo on a reflective plane that is brighter than the plane's
     /// glass echoes (see the evidence grid) is an opaque surface (Normal).
     pub wall_echo_test: bool,
+    /// Test both hypotheses of a behind-plane point against the space seen
+    /// directly over the sequence ([`SpaceMap`](super::space::SpaceMap)):
+    /// real where measured, or the mirror image of a real point. A
+    /// hypothesis whose endpoint lies in seen-free space, or whose path
+    /// beyond the plane runs through a seen surface, is refuted; when exactly
+    /// one is refuted the other decides.
+    pub space_test: bool,
+    /// Paths are tested from this far off the plane and up to this far
+    /// before their endpoint, m (frames and wall strips around a pane, the
+    /// surface the endpoint itself lies on).
+    pub space_margin: f64,
+    /// A mirrored or measured position is in seen-free space only if no seen
+    /// surface lies within this share of its range (at least a voxel): the
+    /// plane's error moves mirrored positions in proportion.
+    pub space_clearance_ratio: f64,
 }
 
 impl Default for DecisionParams {
@@ -96,6 +112,9 @@ impl Default for DecisionParams {
             dual_gap: 0.1,
             ambiguous: Class::Unclassified,
             wall_echo_test: false,
+            space_test: false,
+            space_margin: 0.2,
+            space_clearance_ratio: 0.0,
         }
     }
 }
@@ -202,12 +221,23 @@ pub fn decide(
     support: Option<&dyn SurfaceSupport>,
 ) -> Vec<Class> {
     let hits = BeamHits::compute(frame, scan, planes, params.glass_distance);
-    decide_with_hits(frame, scan, sensor, planes.planes(), &hits, params, support)
+    decide_with_hits(
+        frame,
+        scan,
+        sensor,
+        planes.planes(),
+        &hits,
+        params,
+        support,
+        None,
+    )
 }
 
 /// [`decide`] with the beam test already done: `hits` from
 /// [`BeamHits::compute`] with reach `params.glass_distance` against
-/// `bounded`.
+/// `bounded`; `space` is the sequence's directly seen space from this
+/// frame's pose, for the two-hypothesis test.
+#[allow(clippy::too_many_arguments)]
 pub fn decide_with_hits(
     frame: &Frame,
     scan: &OrganizedScan,
@@ -216,6 +246,7 @@ pub fn decide_with_hits(
     hits: &BeamHits,
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
+    space: Option<&SensorFrameSpace<'_>>,
 ) -> Vec<Class> {
     let n = frame.points.len();
     // 1. Beam test.
@@ -284,6 +315,9 @@ pub fn decide_with_hits(
         (None, s) => s,
     };
 
+    // The planes' boundaries, for beams that cross a second pane.
+    let one_sided = BeamPlanes::hulls(bounded, 0.0);
+
     // 2. Evidence for behind-plane points: obstacle tests first.
     let is_last = |i: usize| frame.points[i].ret == 2 || scan.second(scan.cell_of(i)).is_none();
     for i in 0..n {
@@ -292,6 +326,39 @@ pub fn decide_with_hits(
         };
         let bp = &bounded[plane as usize];
         let p = frame.points[i].position();
+        // Past a second pane the first one's mirror says nothing: such beams
+        // are left to the frame's own tests.
+        let single_pane = {
+            let r = p.coords.norm();
+            let t = beam_crossing(&bp.plane, &p).unwrap_or(r);
+            !one_sided.crosses_between(
+                &p,
+                plane as usize,
+                t + params.glass_distance,
+                r - params.behind_distance,
+            )
+        };
+        if let Some(space) = space.filter(|_| params.space_test && single_pane) {
+            match two_hypotheses(
+                space,
+                support,
+                params.support_radius,
+                &bp.plane,
+                &p,
+                params.space_margin,
+                params.space_clearance_ratio,
+            ) {
+                Verdict::Mirror => {
+                    classes[i] = Class::Reflection;
+                    continue;
+                }
+                Verdict::Real => {
+                    classes[i] = Class::Obstacle;
+                    continue;
+                }
+                Verdict::Open => {}
+            }
+        }
         let depth = -bp.plane.signed_distance(&p);
         let tests_apply = params.obstacle_tests_on_all_returns || is_last(i);
         if tests_apply
@@ -321,6 +388,22 @@ pub fn decide_with_hits(
                     continue;
                 }
             }
+        }
+        // Echo strength, where the landmark's echoes fall in two groups:
+        // a reflection off glass is far weaker than a transmitted echo, which
+        // tells floors and ceilings behind glass (their own mirror images)
+        // from their reflections.
+        if let Some(reflected) = bp
+            .echo_split
+            .filter(|_| single_pane)
+            .and_then(|split| split.reflected(frame.points[i].intensity, p.coords.norm()))
+        {
+            classes[i] = if reflected {
+                Class::Reflection
+            } else {
+                Class::Obstacle
+            };
+            continue;
         }
         if params.support_test {
             let on_beam = along_beam.is_some_and(|(closest, _)| {
@@ -363,6 +446,71 @@ pub fn decide_with_hits(
         }
     }
     classes
+}
+
+/// What the directly seen space says about a behind-plane point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Verdict {
+    /// Only the mirror hypothesis survives: a Reflection.
+    Mirror,
+    /// Only the real hypothesis survives: an Obstacle seen through glass.
+    Real,
+    /// Both or neither survive: the frame's own tests decide.
+    Open,
+}
+
+/// The two hypotheses of point `p` (sensor frame) behind `plane`: real where
+/// measured, reached straight through the plane, or the mirror image of a
+/// real point reached by reflection at the plane. Each is refuted when its
+/// endpoint lies in seen-free space or its leg beyond the crossing runs
+/// through a seen surface (tested from `margin` off the plane to `margin`
+/// before the endpoint).
+fn two_hypotheses(
+    space: &SensorFrameSpace<'_>,
+    support: Option<&dyn SurfaceSupport>,
+    support_radius: f64,
+    plane: &crate::geometry::Plane,
+    p: &Point3<f64>,
+    margin: f64,
+    clearance_ratio: f64,
+) -> Verdict {
+    let range = p.coords.norm();
+    let Some(t) = beam_crossing(plane, p) else {
+        return Verdict::Open;
+    };
+    let x = Point3::from(p.coords * (t / range));
+    let mirrored = plane.mirror(p);
+    let clearance = clearance_ratio * range;
+    let refuted = |end: &Point3<f64>| {
+        if space.occupancy_clear_of(end, clearance) == Occupancy::Free {
+            return true;
+        }
+        // Start where the leg is `margin` off the plane: a leg at a grazing
+        // angle runs along the frames and wall strips beside the pane.
+        let dir = end - x;
+        let len = dir.norm();
+        if !(len > 0.0) {
+            return false;
+        }
+        let off = plane.normal.dot(&dir).abs() / len;
+        let start_t = if off > 1e-9 { margin / off } else { len };
+        if start_t + margin >= len {
+            return false;
+        }
+        // A path towards an observed surface is not refuted by a voxel it
+        // clips on the way: voxels are coarser than chair legs and desk
+        // edges. A path into space nobody saw, through a seen surface, is.
+        if support.is_some_and(|s| s.near(end, support_radius)) {
+            return false;
+        }
+        let start = x + dir * (start_t / len);
+        space.blocked(&start, end, margin)
+    };
+    match (refuted(p), refuted(&mirrored)) {
+        (false, true) => Verdict::Real,
+        (true, false) => Verdict::Mirror,
+        _ => Verdict::Open,
+    }
 }
 
 /// Along the beams towards `q` (sensor frame): the range of the return
@@ -438,5 +586,207 @@ impl SurfaceSupport for NormalPointIndex {
             .nearest_one::<kiddo::SquaredEuclidean<f64>>()
             .execute();
         nn.distance <= radius * radius
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::classify::space::SpaceMap;
+    use crate::cloud::Point;
+    use crate::geometry::Plane;
+    use nalgebra::{Isometry3, Vector3};
+
+    /// A pane at x = 5 (facing the sensor at the origin), 4 m wide and 3 m
+    /// high.
+    fn pane() -> Vec<BoundedPlane> {
+        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
+        vec![BoundedPlane::from_points(
+            plane,
+            corners.iter().map(|&(y, z)| Point3::new(5.0, y, z)),
+        )]
+    }
+
+    /// One frame holding only `points` (sensor frame, single returns).
+    fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
+        Frame {
+            name: "synthetic".into(),
+            points: points
+                .iter()
+                .map(|&xyz| Point {
+                    xyz,
+                    intensity,
+                    ring: 0,
+                    ret: 1,
+                    label: 0,
+                })
+                .collect(),
+            ..Frame::default()
+        }
+    }
+
+    /// The room in front of the pane seen directly from a second pose: its
+    /// air carved, its back wall at x = -3 and the floor hit.
+    fn room_space() -> SpaceMap {
+        let mut map = SpaceMap::new(0.1, 2, 1);
+        let origin = Point3::new(2.0, 0.0, 0.0);
+        for j in -60..=60 {
+            for k in -20..=30 {
+                let (y, z) = (j as f64 * 0.05, k as f64 * 0.05);
+                map.add_beam(&origin, &Point3::new(-3.0, y, z), 0.2, true);
+                // Up to the pane only: beyond it the beam is ambiguous.
+                map.add_beam(&origin, &Point3::new(5.0, y, z), 0.2, false);
+            }
+        }
+        map
+    }
+
+    /// Only the rule under test decides: the frame's own tests are off.
+    fn rule_only(space_test: bool) -> DecisionParams {
+        DecisionParams {
+            depth_test: false,
+            free_space_test: false,
+            support_test: false,
+            dual_return_rule: false,
+            space_test,
+            ..DecisionParams::default()
+        }
+    }
+
+    fn classify(
+        points: &[[f32; 3]],
+        intensity: f32,
+        planes: &[BoundedPlane],
+        params: &DecisionParams,
+    ) -> Vec<Class> {
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let f = frame(points, intensity);
+        let scan = OrganizedScan::build(&f, &sensor).unwrap();
+        let beams = BeamPlanes::hulls(planes, 0.0);
+        let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
+        let space = room_space();
+        let view = space.in_sensor_frame(Isometry3::identity());
+        decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view))
+    }
+
+    /// Pitfall 1 of the brief: a box 0.5 m behind the pane, closer than the
+    /// room is deep. Its mirror image lands in the room's seen-free air, so
+    /// it is an Obstacle; a point whose measured position (behind the pane)
+    /// was never seen but whose mirror image lies on the far wall stays
+    /// open. Without the rule both are undecided.
+    #[test]
+    fn an_obstacle_close_behind_glass_is_told_by_the_free_space_in_front() {
+        let planes = pane();
+        let points = [[5.5f32, 0.2, 0.3]];
+        assert_eq!(
+            classify(&points, 50.0, &planes, &rule_only(true)),
+            [Class::Obstacle]
+        );
+        assert_eq!(
+            classify(&points, 50.0, &planes, &rule_only(false)),
+            [Class::Unclassified]
+        );
+    }
+
+    /// A virtual point behind the pane whose measured position is inside
+    /// seen-free space cannot be real: a Reflection. The room is mirrored
+    /// behind the pane at x = 5..13, so place the "seen free" region there:
+    /// a pose beyond the pane saw that space directly.
+    #[test]
+    fn a_point_in_space_seen_free_is_a_reflection() {
+        let planes = pane();
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let f = frame(&[[8.0, 0.2, 0.3]], 50.0);
+        let scan = OrganizedScan::build(&f, &sensor).unwrap();
+        let params = rule_only(true);
+        let hits = BeamHits::compute(&f, &scan, &BeamPlanes::hulls(&planes, 0.0), 0.1);
+        // Space beyond the pane seen from a pose out there; the mirror image
+        // of the point (x = 2) lies in the room, never seen.
+        let mut space = SpaceMap::new(0.1, 2, 1);
+        for j in -10..=10 {
+            for k in -10..=10 {
+                let end = Point3::new(12.0, j as f64 * 0.1, k as f64 * 0.1);
+                space.add_beam(&Point3::new(6.0, 0.0, 0.0), &end, 0.2, true);
+            }
+        }
+        let view = space.in_sensor_frame(Isometry3::identity());
+        let with = decide_with_hits(
+            &f,
+            &scan,
+            &sensor,
+            &planes,
+            &hits,
+            &params,
+            None,
+            Some(&view),
+        );
+        assert_eq!(with, [Class::Reflection]);
+        let without = decide_with_hits(
+            &f,
+            &scan,
+            &sensor,
+            &planes,
+            &hits,
+            &rule_only(false),
+            None,
+            Some(&view),
+        );
+        assert_eq!(without, [Class::Unclassified]);
+    }
+
+    /// The echo split decides a behind-plane point by its strength, only
+    /// where the landmark has one.
+    #[test]
+    fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
+        let mut planes = pane();
+        let params = rule_only(false);
+        let points = [[8.0f32, 0.2, 0.3]];
+        assert_eq!(
+            classify(&points, 1.0, &planes, &params),
+            [Class::Unclassified]
+        );
+        // log10(I r²) at 8 m: 1.8 for I = 1, 3.8 for I = 100.
+        planes[0].echo_split = Some(crate::reflect::EchoSplit {
+            threshold: 2.8,
+            band: 0.1,
+            range_exponent: 2.0,
+            weak_is_reflection: true,
+        });
+        assert_eq!(
+            classify(&points, 1.0, &planes, &params),
+            [Class::Reflection]
+        );
+        assert_eq!(
+            classify(&points, 100.0, &planes, &params),
+            [Class::Obstacle]
+        );
+        // Inside the band: left to the other tests.
+        assert_eq!(
+            classify(&points, 9.8, &planes, &params),
+            [Class::Unclassified]
+        );
+    }
+
+    /// A beam through two panes is left to the frame's own tests: the first
+    /// pane's mirror says nothing about it.
+    #[test]
+    fn beams_through_a_second_pane_skip_the_one_pane_tests() {
+        let mut planes = pane();
+        let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
+        let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
+        planes.push(BoundedPlane::from_points(
+            second,
+            corners.iter().map(|&(y, z)| Point3::new(6.0, y, z)),
+        ));
+        let points = [[6.5f32, 0.2, 0.3]];
+        assert_eq!(
+            classify(&points, 50.0, &planes, &rule_only(true)),
+            [Class::Unclassified]
+        );
+        assert_eq!(
+            classify(&points, 50.0, &planes[..1], &rule_only(true)),
+            [Class::Obstacle]
+        );
     }
 }

@@ -14,11 +14,13 @@ pub mod decide;
 pub mod mirror;
 pub mod plane_map;
 pub mod single_scan;
+pub mod space;
 pub mod support;
 
 pub use decide::{BeamHit, BeamHits, DecisionParams, SurfaceSupport};
 pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
 pub use single_scan::SingleScanClassifier;
+pub use space::{Occupancy, SpaceMap};
 pub use support::WorldSupport;
 
 use serde::{Deserialize, Serialize};
@@ -94,6 +96,9 @@ pub struct FrameInput<'a> {
     pub map_planes: &'a [BoundedPlane],
     /// Observed surfaces of the whole sequence (world frame), when built.
     pub support: Option<&'a WorldSupport>,
+    /// Space seen directly over the whole sequence (world frame), when
+    /// built.
+    pub space: Option<&'a SpaceMap>,
     /// The beam test against `map_planes`, when a pipeline has run it
     /// already ([`PlaneMapClassifier::beam_hits`]); `None` runs it here.
     pub beam_hits: Option<&'a BeamHits>,

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::boundary::BeamPlanes;
 use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
 use super::{Class, Classifier, FrameInput};
-use crate::reflect::{planes_seen_from, BoundedPlane};
+use crate::reflect::{planes_seen_from, BoundedPlane, EchoSplitParams};
 
 /// Parameters of the plane-map classifier.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -25,6 +25,22 @@ pub struct PlaneMapParams {
     pub support_keyframe_move: f64,
     /// ... or turned this much, degrees.
     pub support_keyframe_turn_deg: f64,
+    /// Voxel edge of the directly seen space (two-hypothesis test), m.
+    pub space_voxel: f64,
+    /// Beams that must pass a voxel before it counts as free.
+    pub space_min_passes: u8,
+    /// Returns from a voxel needed before it blocks a path.
+    pub space_block_hits: u8,
+    /// Carving stops this share of the range before a beam's endpoint (and
+    /// at least two voxels): beam footprint and grazing incidence.
+    pub space_stop_ratio: f64,
+    /// A frame carves the space when the sensor moved this far since the
+    /// last frame that did, m ...
+    pub space_keyframe_move: f64,
+    /// ... or turned this much, degrees.
+    pub space_keyframe_turn_deg: f64,
+    /// Per-landmark split of reflected and transmitted echoes by strength.
+    pub echo_split: EchoSplitParams,
     /// The decision thresholds and switches.
     pub decision: DecisionParams,
 }
@@ -37,6 +53,13 @@ impl Default for PlaneMapParams {
             support_voxel: 0.05,
             support_keyframe_move: 0.0,
             support_keyframe_turn_deg: 0.0,
+            space_voxel: 0.1,
+            space_min_passes: 2,
+            space_block_hits: 5,
+            space_stop_ratio: 0.05,
+            space_keyframe_move: 0.25,
+            space_keyframe_turn_deg: 10.0,
+            echo_split: EchoSplitParams::default(),
             decision: DecisionParams {
                 depth_margin: 0.1,
                 obstacle_tests_on_all_returns: true,
@@ -120,6 +143,10 @@ impl Classifier for PlaneMapClassifier {
             .filter(|_| self.params.sequence_support)
             .map(|s| s.in_sensor_frame(input.pose));
         let support = view.as_ref().map(|v| v as &dyn SurfaceSupport);
+        let space = input
+            .space
+            .filter(|_| self.params.decision.space_test)
+            .map(|s| s.in_sensor_frame(input.pose));
         let own_hits;
         let hits = match input.beam_hits {
             Some(h) => h,
@@ -136,6 +163,7 @@ impl Classifier for PlaneMapClassifier {
             hits,
             &self.params.decision,
             support,
+            space.as_ref(),
         )
     }
 }

@@ -15,7 +15,7 @@ use specular::sim::{self, LabelCounts, PlaneTally, Scene, Simulator, TruePlanes}
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
     /// Scene: a TOML file or a built-in name (demo, office, corridor,
-    /// mirror-room, lobby, two-panes).
+    /// mirror-room, lobby, glass-loop, two-panes).
     #[arg(long)]
     pub scene: String,
     /// Output directory: OUT/frames/<timestamp>.ply, OUT/poses.txt,

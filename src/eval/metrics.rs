@@ -36,7 +36,25 @@ pub struct Confusion {
     pub counts: [[u64; 5]; 4],
     /// Points with an ignored label (0 or 4).
     pub ignored: u64,
+    /// Every point by `[truth label id][prediction id]`: label ids 0-6 as
+    /// in 3DRef (7 holds any other id), prediction ids 0 (unclassified),
+    /// 1, 2, 5 and 6; ignored labels included, so a reader sees where
+    /// mirrors (3) and other reflective surfaces (4) went.
+    #[serde(default)]
+    pub by_label: [[u64; 8]; 8],
 }
+
+/// Names of the 3DRef label ids, row order of [`Confusion::by_label`].
+pub const LABEL_NAMES: [&str; 8] = [
+    "unlabeled",
+    "normal",
+    "glass",
+    "mirror",
+    "other reflective",
+    "reflection",
+    "obstacle",
+    "other id",
+];
 
 impl Confusion {
     /// Add one frame's labels and predictions (same length and order).
@@ -55,6 +73,9 @@ impl Confusion {
             let n: u64 = row.iter().sum();
             if n == 0 {
                 continue;
+            }
+            for (pred, &count) in row.iter().enumerate() {
+                self.by_label[label.min(7)][pred] += count;
             }
             let Some(t) = truth_class(label as u8).and_then(class_index) else {
                 self.ignored += n;
@@ -75,6 +96,42 @@ impl Confusion {
             }
         }
         self.ignored += other.ignored;
+        for (a, b) in self.by_label.iter_mut().zip(&other.by_label) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+    }
+
+    /// The truth-by-prediction counts of every label id as a Markdown table
+    /// (rows: labels present; columns: the prediction ids).
+    pub fn label_table(&self) -> String {
+        const PREDICTIONS: [(usize, &str); 5] = [
+            (0, "unclassified (0)"),
+            (1, "normal (1)"),
+            (2, "reflective surface (2)"),
+            (5, "reflection (5)"),
+            (6, "obstacle (6)"),
+        ];
+        let mut s = String::from("| truth \\ prediction |");
+        for (_, name) in PREDICTIONS {
+            s.push_str(&format!(" {name} |"));
+        }
+        s.push_str(" points |\n|---|");
+        s.push_str(&"---:|".repeat(PREDICTIONS.len() + 1));
+        s.push('\n');
+        for (label, row) in self.by_label.iter().enumerate() {
+            let n: u64 = row.iter().sum();
+            if n == 0 {
+                continue;
+            }
+            s.push_str(&format!("| {} ({label}) |", LABEL_NAMES[label]));
+            for (id, _) in PREDICTIONS {
+                s.push_str(&format!(" {} |", row[id]));
+            }
+            s.push_str(&format!(" {n} |\n"));
+        }
+        s
     }
 
     /// Of the true Normal and Glass points, the share predicted Normal or
@@ -256,6 +313,17 @@ mod tests {
             Class::Normal,
         ];
         conf.add(&labels, &preds);
+        // Every point is in the label table, ignored ones included.
+        assert_eq!(conf.by_label.iter().flatten().sum::<u64>(), 8);
+        assert_eq!(conf.by_label[5][5], 1);
+        assert_eq!(conf.by_label[5][0], 1);
+        assert_eq!(conf.by_label[4][1], 1);
+        let table = conf.label_table();
+        assert!(
+            table.contains("| other reflective (4) | 0 | 1 |"),
+            "{table}"
+        );
+        assert!(!table.contains("mirror (3)"), "{table}");
         let m = conf.metrics();
         assert_eq!(m.points, 6);
         assert_eq!(m.ignored, 2);

@@ -18,13 +18,17 @@ use rayon::prelude::*;
 use super::registry::{detector, merger, plane_map_classifier};
 use super::single_scan::{check_frame, organize_and_detect};
 use super::{FrameOutput, RunOutput, Sequence, StageTimings};
+use crate::classify::boundary::BeamPlanes;
 use crate::classify::mirror::mirror_reflections;
-use crate::classify::{BeamHits, Class, Classifier, FrameInput, PlaneMapClassifier, WorldSupport};
+use crate::classify::{
+    BeamHits, Class, Classifier, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, WorldSupport,
+};
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
-use crate::reflect::{planes_seen_from, BoundedPlane, Detection};
+use crate::reflect::echo_split::echo_strength;
+use crate::reflect::{planes_seen_from, BoundedPlane, Detection, EchoHistogram, EchoSplit};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
@@ -128,25 +132,68 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         pose: poses[k],
         map_planes: &map_planes,
         support: None,
+        space: None,
         beam_hits: None,
     };
     // The sequence's surface support, when used: the beam test of every
     // frame (shared with the classification), then the surfaces it found.
     let mut hits: Vec<BeamHits> = Vec::new();
     let mut support = None;
-    if classifier.params().sequence_support {
+    let mut space = None;
+    let p = classifier.params();
+    if p.sequence_support || p.decision.space_test {
         let start = Instant::now();
         hits = (0..sequence.len())
             .into_par_iter()
             .map(|k| classifier.beam_hits(&input(k)))
             .collect();
         timings.add("beam test", start.elapsed());
+    }
+    if p.sequence_support {
         let start = Instant::now();
-        let p = classifier.params();
         let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
         support = Some(sequence_support(&classifier, &views, &hits, &input));
         timings.add("support", start.elapsed());
     }
+    if p.decision.space_test {
+        let start = Instant::now();
+        let views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
+        space = Some(seen_space(&classifier, &views, &hits, &input));
+        timings.add("space", start.elapsed());
+        if let Some(s) = &space {
+            tracing::info!(
+                keyframes = views.len(),
+                bricks = s.bricks(),
+                "space seen directly"
+            );
+        }
+    }
+    let splits = match (&space, p.echo_split.enabled) {
+        (Some(space), true) => {
+            let start = Instant::now();
+            let views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
+            let splits = fit_echo_splits(&classifier, &views, &hits, &input, space);
+            timings.add("echo split", start.elapsed());
+            Some(splits)
+        }
+        _ => None,
+    };
+    // The landmarks as classified: with their echo splits, when learned.
+    let classified_planes: Vec<BoundedPlane> = match splits {
+        Some(splits) => map_planes
+            .iter()
+            .zip(splits)
+            .map(|(bp, echo_split)| BoundedPlane {
+                echo_split,
+                ..bp.clone()
+            })
+            .collect(),
+        None => map_planes.clone(),
+    };
+    let input = |k: usize| FrameInput {
+        map_planes: &classified_planes,
+        ..input(k)
+    };
     let bar = crate::progress::bar(sequence.len(), "classify");
     let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
         .into_par_iter()
@@ -154,6 +201,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
             let start = Instant::now();
             let classes = classifier.classify(&FrameInput {
                 support: support.as_ref(),
+                space: space.as_ref(),
                 beam_hits: hits.get(k),
                 ..input(k)
             });
@@ -178,7 +226,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         run: RunOutput { frames, timings },
         map,
         used,
-        planes: map_planes,
+        planes: classified_planes,
     })
 }
 
@@ -243,6 +291,121 @@ fn sequence_support<'a>(
             .map(move |&i| Point3::from(r * points[i as usize].position().coords + t))
     });
     WorldSupport::build(points, params.support_voxel, params.decision.support_radius)
+}
+
+/// The space seen directly from the keyframes `frames` (world frame):
+/// every beam that crosses no reflective pane marks its endpoint occupied
+/// and carves the voxels before it; a beam that crosses a pane carves only
+/// up to the pane. Of a beam's two returns only the nearer is used: the
+/// farther may have passed an unmapped pane. `hits` holds every frame's beam
+/// test.
+fn seen_space<'a>(
+    classifier: &PlaneMapClassifier,
+    frames: &[usize],
+    hits: &[BeamHits],
+    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
+) -> SpaceMap {
+    let p = classifier.params();
+    let glass = p.decision.glass_distance;
+    let mut space = SpaceMap::new(p.space_voxel, p.space_min_passes, p.space_block_hits);
+    let min_stop = 2.0 * space.voxel();
+    for &k in frames {
+        let inp = input(k);
+        let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
+        let (r, t) = rotation_translation(&inp.pose);
+        let origin = Point3::from(t);
+        let points = &inp.frame.points;
+        for (i, pt) in points.iter().enumerate() {
+            let range = pt.range();
+            if !(range > 0.0) {
+                continue;
+            }
+            if inp
+                .scan
+                .partner(i)
+                .is_some_and(|j| points[j].range() < range)
+            {
+                continue;
+            }
+            let pos = pt.position();
+            let (end_range, hit) = match hits[k].get(i, &pos, &planes) {
+                Some(h) if range >= h.range - glass => (h.range.min(range), false),
+                _ => (range, true),
+            };
+            let end = Point3::from(r * (pos.coords * (end_range / range)) + t);
+            let stop = min_stop.max(p.space_stop_ratio * range);
+            space.add_beam(&origin, &end, stop, hit);
+        }
+    }
+    space
+}
+
+/// Each map plane's split of echoes behind it into reflected and
+/// transmitted ones ([`EchoSplit`]), from the keyframes `frames`: the
+/// strengths of every point behind the plane, oriented by the points whose
+/// mirror image lies in seen-free space (they cannot be reflections).
+fn fit_echo_splits<'a>(
+    classifier: &PlaneMapClassifier,
+    frames: &[usize],
+    hits: &[BeamHits],
+    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
+    space: &SpaceMap,
+) -> Vec<Option<EchoSplit>> {
+    let p = classifier.params();
+    let behind = p.decision.behind_distance;
+    let glass = p.decision.glass_distance;
+    let clearance = p.decision.space_clearance_ratio;
+    let exponent = p.echo_split.range_exponent;
+    let n = input(0).map_planes.len();
+    let per_frame: Vec<Vec<(EchoHistogram, EchoHistogram)>> = frames
+        .par_iter()
+        .map(|&k| {
+            let inp = input(k);
+            let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
+            let view = space.in_sensor_frame(inp.pose);
+            let beams = BeamPlanes::hulls(&planes, p.hull_margin);
+            let mut out = vec![(EchoHistogram::default(), EchoHistogram::default()); n];
+            for (i, pt) in inp.frame.points.iter().enumerate() {
+                let pos = pt.position();
+                let Some(h) = hits[k].get(i, &pos, &planes) else {
+                    continue;
+                };
+                let range = pos.coords.norm();
+                // Only beams behind one pane: past a second one the mirror
+                // of the first says nothing.
+                if range - h.range <= behind
+                    || beams.crosses_between(&pos, h.plane, h.range + glass, range - behind)
+                {
+                    continue;
+                }
+                let strength = echo_strength(pt.intensity, range, exponent);
+                out[h.plane].0.add(strength);
+                let mirrored = planes[h.plane].plane.mirror(&pos);
+                if view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free {
+                    out[h.plane].1.add(strength);
+                }
+            }
+            out
+        })
+        .collect();
+    (0..n)
+        .map(|j| {
+            let (mut all, mut anchors) = (EchoHistogram::default(), EchoHistogram::default());
+            for f in &per_frame {
+                all.merge(&f[j].0);
+                anchors.merge(&f[j].1);
+            }
+            let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
+            tracing::debug!(
+                plane = j,
+                behind = all.total(),
+                anchors = anchors.total(),
+                ?split,
+                "echo split"
+            );
+            split
+        })
+        .collect()
 }
 
 /// The classified map in the world frame ("around the corner"): Normal,

@@ -95,6 +95,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
                 pose: nalgebra::Isometry3::identity(),
                 map_planes: &[],
                 support: None,
+                space: None,
             });
             t.add("classify", start.elapsed());
             t.frames = 1;

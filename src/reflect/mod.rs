@@ -8,9 +8,11 @@
 
 pub mod candidates;
 pub mod detector;
+pub mod echo_split;
 pub mod intensity_peak;
 
 pub use detector::{CandidateRansacDetector, CandidateSource, DetectorParams};
+pub use echo_split::{EchoHistogram, EchoSplit, EchoSplitParams};
 pub use intensity_peak::IntensityPeakParams;
 
 use nalgebra::{Isometry3, Point2, Point3};
@@ -38,6 +40,9 @@ pub struct BoundedPlane {
     /// fitted: then the reflective extent is exactly their union (possibly
     /// empty), and `boundary` and `evidence` are not consulted.
     pub panes: Option<Arc<Vec<ConvexPolygon>>>,
+    /// How the echoes behind this plane split into reflected and
+    /// transmitted ones by strength, when learned.
+    pub echo_split: Option<EchoSplit>,
 }
 
 impl BoundedPlane {
@@ -51,6 +56,7 @@ impl BoundedPlane {
             boundary: ConvexPolygon::hull(&projected),
             evidence: None,
             panes: None,
+            echo_split: None,
         }
     }
 
@@ -134,6 +140,7 @@ impl BoundedPlane {
             boundary: self.boundary.clone(),
             evidence: self.evidence.clone(),
             panes: self.panes.clone(),
+            echo_split: self.echo_split,
         }
     }
 

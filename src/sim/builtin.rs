@@ -15,6 +15,10 @@ const SCENES: &[(&str, &str)] = &[
     ),
     ("lobby", include_str!("../../datasets/scenes/lobby.toml")),
     (
+        "glass-loop",
+        include_str!("../../datasets/scenes/glass-loop.toml"),
+    ),
+    (
         "two-panes",
         include_str!("../../datasets/scenes/two-panes.toml"),
     ),

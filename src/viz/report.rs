@@ -60,6 +60,9 @@ impl Report<'_> {
                 m.points,
                 m.ignored
             ));
+            s.push_str("### Confusion matrix\n\nEvery point by its 3DRef label (rows) and the predicted class (columns), ignored labels included:\n\n");
+            s.push_str(&m.confusion.label_table());
+            s.push('\n');
         }
         if !self.plots.is_empty() {
             s.push_str("## Plots\n\n");

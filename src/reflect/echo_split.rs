@@ -1,0 +1,240 @@
+//! Reflection or transmission told by echo strength, learned per landmark.
+//!
+//! A return behind a pane either crossed it twice (transmitted: the power
+//! is scaled by T², about 0.85 for plain glass near normal incidence) or was
+//! reflected by it (R², about 0.006): through uncoated glass a reflection is
+//! one to two orders of magnitude weaker than a transmitted echo from a
+//! similar surface at the same range. Geometry cannot tell a floor behind
+//! vertical glass from the reflection of the floor in front (the floor is
+//! its own mirror image), but the echo strength can.
+//!
+//! No intensity scale is assumed. For each landmark the range-corrected
+//! echo strengths `log10(I · r^k)` of the points behind it are split in two
+//! by Otsu's method; the split is used only when the two groups are far
+//! apart (coated glass with `R ≈ T` gives one group, and then this test
+//! abstains), and the side that is transmission is read from anchors: points
+//! whose mirror image lies in space seen free, which cannot be reflections.
+
+use serde::{Deserialize, Serialize};
+
+/// Histogram range and resolution of `log10(I · r^k)`.
+const LOG_MIN: f64 = -1.0;
+const LOG_MAX: f64 = 7.0;
+const BIN: f64 = 0.05;
+const BINS: usize = ((LOG_MAX - LOG_MIN) / BIN) as usize;
+
+/// Settings of the per-landmark echo split.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EchoSplitParams {
+    /// Learn and use the split.
+    pub enabled: bool,
+    /// Echo strength is corrected by the range to this power (2 for a raw
+    /// return power falling with the square of the range).
+    pub range_exponent: f64,
+    /// The two groups' means must differ by this many decades.
+    pub min_separation: f64,
+    /// Anchors (points that cannot be reflections) needed to orient the
+    /// split.
+    pub min_anchors: u32,
+    /// Share of the anchors that must fall on the transmitted side.
+    pub min_anchor_agreement: f64,
+    /// Points within this many decades of the threshold are left to the
+    /// other tests.
+    pub band: f64,
+}
+
+impl Default for EchoSplitParams {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            range_exponent: 2.0,
+            min_separation: 0.5,
+            min_anchors: 30,
+            min_anchor_agreement: 0.75,
+            band: 0.1,
+        }
+    }
+}
+
+/// Counts of echo strengths, `log10(I · r^k)` in fixed bins (bounded
+/// memory whatever the number of frames).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EchoHistogram {
+    counts: Vec<u32>,
+}
+
+impl Default for EchoHistogram {
+    fn default() -> Self {
+        Self {
+            counts: vec![0; BINS],
+        }
+    }
+}
+
+/// The echo strength of a return of intensity `intensity` at `range` metres.
+#[inline]
+pub fn echo_strength(intensity: f32, range: f64, range_exponent: f64) -> f64 {
+    (intensity.max(0.5) as f64).log10() + range_exponent * range.max(1e-3).log10()
+}
+
+impl EchoHistogram {
+    /// Count one echo strength.
+    pub fn add(&mut self, strength: f64) {
+        if strength.is_finite() {
+            let b = ((strength - LOG_MIN) / BIN)
+                .floor()
+                .clamp(0.0, (BINS - 1) as f64);
+            self.counts[b as usize] += 1;
+        }
+    }
+
+    /// Add another histogram's counts.
+    pub fn merge(&mut self, other: &Self) {
+        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
+            *a += b;
+        }
+    }
+
+    /// Echoes counted.
+    pub fn total(&self) -> u64 {
+        self.counts.iter().map(|&c| c as u64).sum()
+    }
+
+    /// Echoes counted above `threshold`.
+    fn above(&self, threshold: f64) -> u64 {
+        self.counts
+            .iter()
+            .enumerate()
+            .filter(|(b, _)| centre(*b) > threshold)
+            .map(|(_, &c)| c as u64)
+            .sum()
+    }
+
+    /// Otsu's threshold: the split maximising the between-group variance,
+    /// with the two groups' means; `None` with fewer than two occupied bins.
+    fn otsu(&self) -> Option<(f64, f64, f64)> {
+        let total = self.total() as f64;
+        let sum: f64 = self
+            .counts
+            .iter()
+            .enumerate()
+            .map(|(b, &c)| c as f64 * centre(b))
+            .sum();
+        let (mut w0, mut s0) = (0.0, 0.0);
+        let mut best: Option<(f64, f64, f64, f64)> = None;
+        for b in 0..BINS - 1 {
+            w0 += self.counts[b] as f64;
+            s0 += self.counts[b] as f64 * centre(b);
+            let w1 = total - w0;
+            if w0 == 0.0 || w1 == 0.0 {
+                continue;
+            }
+            let (m0, m1) = (s0 / w0, (sum - s0) / w1);
+            let between = w0 * w1 * (m0 - m1) * (m0 - m1);
+            if best.is_none_or(|(v, ..)| between > v) {
+                best = Some((between, centre(b) + BIN / 2.0, m0, m1));
+            }
+        }
+        best.map(|(_, t, m0, m1)| (t, m0, m1))
+    }
+}
+
+fn centre(bin: usize) -> f64 {
+    LOG_MIN + (bin as f64 + 0.5) * BIN
+}
+
+/// A landmark's learned split between transmitted and reflected echoes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EchoSplit {
+    /// Strength (`log10(I · r^k)`) between the two groups.
+    pub threshold: f64,
+    /// Half-width of the undecided band around the threshold, decades.
+    pub band: f64,
+    /// The range exponent `k` the strengths use.
+    pub range_exponent: f64,
+    /// Whether the weaker group is the reflections (glass: `R < T`).
+    pub weak_is_reflection: bool,
+}
+
+impl EchoSplit {
+    /// Fit from the strengths of every point behind the landmark and of its
+    /// anchors (points that cannot be reflections); `None` when the
+    /// strengths do not fall in two groups far enough apart, or the anchors
+    /// are too few or disagree.
+    pub fn fit(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitParams) -> Option<Self> {
+        let (threshold, m0, m1) = all.otsu()?;
+        if (m1 - m0).abs() < p.min_separation {
+            return None;
+        }
+        let n = anchors.total();
+        if n < p.min_anchors as u64 {
+            return None;
+        }
+        let strong = anchors.above(threshold) as f64 / n as f64;
+        let weak_is_reflection = if strong >= p.min_anchor_agreement {
+            true
+        } else if 1.0 - strong >= p.min_anchor_agreement {
+            false
+        } else {
+            return None;
+        };
+        Some(Self {
+            threshold,
+            band: p.band,
+            range_exponent: p.range_exponent,
+            weak_is_reflection,
+        })
+    }
+
+    /// Whether a return of `intensity` at `range` was reflected (`Some(true)`),
+    /// transmitted (`Some(false)`), or is too close to the threshold to say.
+    pub fn reflected(&self, intensity: f32, range: f64) -> Option<bool> {
+        let s = echo_strength(intensity, range, self.range_exponent);
+        if (s - self.threshold).abs() <= self.band {
+            return None;
+        }
+        Some((s < self.threshold) == self.weak_is_reflection)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn histogram(values: impl IntoIterator<Item = f64>) -> EchoHistogram {
+        let mut h = EchoHistogram::default();
+        for v in values {
+            h.add(v);
+        }
+        h
+    }
+
+    /// Two groups 1.5 decades apart split between them, oriented by the
+    /// anchors; one group (coated glass) gives no split.
+    #[test]
+    fn two_groups_split_and_one_group_does_not() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let weak: Vec<f64> = (0..500).map(|_| 2.0 + 0.3 * rng.unit()).collect();
+        let strong: Vec<f64> = (0..800).map(|_| 3.5 + 0.4 * rng.unit()).collect();
+        let all = histogram(weak.iter().chain(&strong).copied());
+        let anchors = histogram(strong.iter().take(100).copied());
+        let p = EchoSplitParams::default();
+        let split = EchoSplit::fit(&all, &anchors, &p).expect("a split");
+        assert!(split.threshold > 2.3 && split.threshold < 3.5, "{split:?}");
+        assert!(split.weak_is_reflection);
+        // A weak echo at 10 m is a reflection, a strong one transmitted.
+        assert_eq!(split.reflected(1.0, 10.0), Some(true));
+        assert_eq!(split.reflected(100.0, 10.0), Some(false));
+        // Anchors on the weak side flip the orientation (strong mirrors).
+        let flipped = EchoSplit::fit(&all, &histogram(weak.iter().take(100).copied()), &p);
+        assert!(!flipped.expect("a split").weak_is_reflection);
+        // Too few anchors, or anchors on both sides: no split.
+        assert!(EchoSplit::fit(&all, &histogram(strong.iter().take(5).copied()), &p).is_none());
+        let mixed = histogram(weak.iter().take(50).chain(strong.iter().take(50)).copied());
+        assert!(EchoSplit::fit(&all, &mixed, &p).is_none());
+        // One group: no split.
+        let one = histogram(strong.iter().copied());
+        assert!(EchoSplit::fit(&one, &anchors, &p).is_none());
+    }
+}
