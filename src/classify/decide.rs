@@ -27,6 +27,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::boundary::{beam_crossing, BeamPlanes};
+use super::rule::{Decisions, Rule};
 use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
@@ -131,6 +132,7 @@ pub trait SurfaceSupport {
 enum Beam {
     Clear,
     Surface,
+    WallEcho,
     Front,
     Band,
     Behind { plane: u16 },
@@ -219,7 +221,7 @@ pub fn decide(
     planes: &BeamPlanes<'_>,
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
-) -> Vec<Class> {
+) -> Decisions {
     let hits = BeamHits::compute(frame, scan, planes, params.glass_distance);
     decide_with_hits(
         frame,
@@ -247,7 +249,7 @@ pub fn decide_with_hits(
     params: &DecisionParams,
     support: Option<&dyn SurfaceSupport>,
     space: Option<&SensorFrameSpace<'_>>,
-) -> Vec<Class> {
+) -> Decisions {
     let n = frame.points.len();
     // 1. Beam test.
     let beams: Vec<Beam> = frame
@@ -270,7 +272,7 @@ pub fn decide_with_hits(
                                     && single
                                     && e.is_opaque_echo(pt.intensity, cos) =>
                             {
-                                Beam::Front
+                                Beam::WallEcho
                             }
                             _ => Beam::Surface,
                         }
@@ -285,16 +287,19 @@ pub fn decide_with_hits(
             }
         })
         .collect();
-    let mut classes: Vec<Class> = beams
+    let (mut classes, mut rules): (Vec<Class>, Vec<Rule>) = beams
         .iter()
         .map(|b| match b {
-            Beam::Clear | Beam::Front => Class::Normal,
-            Beam::Surface => Class::Glass,
-            Beam::Band | Beam::Behind { .. } => Class::Unclassified,
+            Beam::Clear => (Class::Normal, Rule::NoPane),
+            Beam::Front => (Class::Normal, Rule::InFront),
+            Beam::WallEcho => (Class::Normal, Rule::WallEcho),
+            Beam::Surface => (Class::Glass, Rule::OnPane),
+            Beam::Band => (Class::Unclassified, Rule::Band),
+            Beam::Behind { .. } => (Class::Unclassified, Rule::Undecided),
         })
-        .collect();
+        .unzip();
     if bounded.is_empty() {
-        return classes;
+        return Decisions { classes, rules };
     }
 
     // Deepest indoor point in front of each plane.
@@ -349,11 +354,11 @@ pub fn decide_with_hits(
                 params.space_clearance_ratio,
             ) {
                 Verdict::Mirror => {
-                    classes[i] = Class::Reflection;
+                    (classes[i], rules[i]) = (Class::Reflection, Rule::RealRefuted);
                     continue;
                 }
                 Verdict::Real => {
-                    classes[i] = Class::Obstacle;
+                    (classes[i], rules[i]) = (Class::Obstacle, Rule::MirrorRefuted);
                     continue;
                 }
                 Verdict::Open => {}
@@ -365,7 +370,7 @@ pub fn decide_with_hits(
             && params.depth_test
             && depth > max_indoor[plane as usize] + params.depth_margin
         {
-            classes[i] = Class::Obstacle;
+            (classes[i], rules[i]) = (Class::Obstacle, Rule::Depth);
             continue;
         }
         let mirrored = bp.plane.mirror(&p);
@@ -384,7 +389,7 @@ pub fn decide_with_hits(
         if tests_apply && params.free_space_test {
             if let Some((_, far)) = along_beam {
                 if far > mirrored_range + params.free_space_margin {
-                    classes[i] = Class::Obstacle;
+                    (classes[i], rules[i]) = (Class::Obstacle, Rule::FrameFreeSpace);
                     continue;
                 }
             }
@@ -403,6 +408,7 @@ pub fn decide_with_hits(
             } else {
                 Class::Obstacle
             };
+            rules[i] = Rule::EchoStrength;
             continue;
         }
         if params.support_test {
@@ -412,7 +418,7 @@ pub fn decide_with_hits(
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {
-                classes[i] = Class::Reflection;
+                (classes[i], rules[i]) = (Class::Reflection, Rule::Support);
             }
         }
     }
@@ -434,7 +440,7 @@ pub fn decide_with_hits(
                 && (frame.points[near].position() - frame.points[far].position()).norm()
                     > params.dual_gap
             {
-                classes[near] = Class::Reflection;
+                (classes[near], rules[near]) = (Class::Reflection, Rule::DualReturn);
             }
         }
     }
@@ -445,7 +451,7 @@ pub fn decide_with_hits(
             *c = params.ambiguous;
         }
     }
-    classes
+    Decisions { classes, rules }
 }
 
 /// What the directly seen space says about a behind-plane point.
@@ -667,7 +673,7 @@ mod tests {
         let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
         let space = room_space();
         let view = space.in_sensor_frame(Isometry3::identity());
-        decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view))
+        decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view)).classes
     }
 
     /// Pitfall 1 of the brief: a box 0.5 m behind the pane, closer than the
@@ -721,7 +727,8 @@ mod tests {
             None,
             Some(&view),
         );
-        assert_eq!(with, [Class::Reflection]);
+        assert_eq!(with.classes, [Class::Reflection]);
+        assert_eq!(with.rules, [Rule::RealRefuted]);
         let without = decide_with_hits(
             &f,
             &scan,
@@ -732,7 +739,8 @@ mod tests {
             None,
             Some(&view),
         );
-        assert_eq!(without, [Class::Unclassified]);
+        assert_eq!(without.classes, [Class::Unclassified]);
+        assert_eq!(without.rules, [Rule::Undecided]);
     }
 
     /// The echo split decides a behind-plane point by its strength, only

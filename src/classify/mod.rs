@@ -13,12 +13,14 @@ pub mod boundary;
 pub mod decide;
 pub mod mirror;
 pub mod plane_map;
+pub mod rule;
 pub mod single_scan;
 pub mod space;
 pub mod support;
 
 pub use decide::{BeamHit, BeamHits, DecisionParams, SurfaceSupport};
 pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
+pub use rule::{Decisions, Rule, RuleTally};
 pub use single_scan::SingleScanClassifier;
 pub use space::{Occupancy, SpaceMap};
 pub use support::WorldSupport;
@@ -110,6 +112,7 @@ pub trait Classifier: Send + Sync {
     /// The name this classifier is selected by.
     fn name(&self) -> &'static str;
 
-    /// One class per point, in the frame's point order.
-    fn classify(&self, input: &FrameInput<'_>) -> Vec<Class>;
+    /// One class per point, in the frame's point order, with the rule that
+    /// decided each.
+    fn classify(&self, input: &FrameInput<'_>) -> Decisions;
 }

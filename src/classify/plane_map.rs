@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
 use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
-use super::{Class, Classifier, FrameInput};
+use super::{Classifier, Decisions, FrameInput};
 use crate::reflect::{planes_seen_from, BoundedPlane, EchoSplitParams};
 
 /// Parameters of the plane-map classifier.
@@ -136,7 +136,7 @@ impl Classifier for PlaneMapClassifier {
         "plane-map"
     }
 
-    fn classify(&self, input: &FrameInput<'_>) -> Vec<Class> {
+    fn classify(&self, input: &FrameInput<'_>) -> Decisions {
         let planes = Self::planes_in_sensor_frame(input);
         let view = input
             .support

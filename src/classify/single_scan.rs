@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::boundary::{BeamPlanes, Window};
 use super::decide::{decide, DecisionParams};
-use super::{Class, Classifier, FrameInput};
+use super::{Classifier, Decisions, FrameInput};
 use crate::reflect::BoundedPlane;
 
 /// How a detected plane's extent is bounded.
@@ -69,7 +69,7 @@ impl Classifier for SingleScanClassifier {
         "single-scan"
     }
 
-    fn classify(&self, input: &FrameInput<'_>) -> Vec<Class> {
+    fn classify(&self, input: &FrameInput<'_>) -> Decisions {
         let p = &self.params;
         let planes: Vec<BoundedPlane> = input
             .detection

@@ -214,7 +214,15 @@ pub(crate) fn write_outputs(
     }
     let confusion = output.confusion(sequence);
     if let Some(conf) = &confusion {
-        let json = serde_json::to_string_pretty(&conf.metrics()).context("serialising metrics")?;
+        // The scores, and which rule decided how many points of each label.
+        let mut value = serde_json::to_value(conf.metrics()).context("serialising metrics")?;
+        if let Some(obj) = value.as_object_mut() {
+            obj.insert(
+                "rules".into(),
+                serde_json::to_value(output.rule_tally(sequence)).context("serialising rules")?,
+            );
+        }
+        let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;
         io::write_atomic(&out.join("metrics.json"), |w| {
             std::io::Write::write_all(w, json.as_bytes())
         })?;

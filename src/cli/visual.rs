@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use specular::classify::Class;
+use specular::classify::{Class, Rule};
 use specular::config::Config;
 use specular::io;
 use specular::pipeline::plane_optimized::measured_map;
@@ -54,6 +54,8 @@ pub(crate) fn write_visual(
     }
     let planes: &[BoundedPlane] = map.map(|m| m.planes.as_slice()).unwrap_or(&[]);
     let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
+    let rules: Vec<Vec<Rule>> = output.frames.iter().map(|f| f.rules.clone()).collect();
+    let rule_tally = output.rule_tally(sequence);
     let mut plot_list = Vec::new();
 
     if let Some(poses) = &sequence.poses {
@@ -75,6 +77,7 @@ pub(crate) fn write_visual(
                 &McapRun {
                     sequence,
                     classes: &classes,
+                    rules: &rules,
                     planes,
                     hull_margin: config.plane_map.hull_margin,
                 },
@@ -122,6 +125,7 @@ pub(crate) fn write_visual(
         command_line: command_line(),
         config_toml: config.to_toml(),
         metrics: metrics.as_ref(),
+        rules: Some(&rule_tally),
         summary,
         plots: plot_list,
         files: files.clone(),

@@ -16,7 +16,7 @@ pub use single_scan::run_single_scan;
 pub use slam::{optimize_tracked, run_slam, track_sequence, SlamOutput, Tracked};
 pub use timings::StageTimings;
 
-use crate::classify::Class;
+use crate::classify::{Class, Rule, RuleTally};
 use crate::eval::Confusion;
 
 /// One frame's result.
@@ -26,6 +26,9 @@ pub struct FrameOutput {
     pub name: String,
     /// One class per point, input order.
     pub classes: Vec<Class>,
+    /// The rule that decided each point's class (empty where the method
+    /// does not say).
+    pub rules: Vec<Rule>,
     /// Reflective planes detected in the frame.
     pub planes: usize,
     /// Candidate points found in the frame.
@@ -58,5 +61,15 @@ impl RunOutput {
             );
         }
         Some(c)
+    }
+
+    /// Points by the rule that decided them, their prediction and their
+    /// label (label 0 for unlabelled frames).
+    pub fn rule_tally(&self, sequence: &Sequence) -> RuleTally {
+        let mut t = RuleTally::default();
+        for (f, out) in sequence.frames.iter().zip(&self.frames) {
+            t.add(f.points.iter().map(|p| p.label), &out.classes, &out.rules);
+        }
+        t
     }
 }

@@ -21,7 +21,8 @@ use super::{FrameOutput, RunOutput, Sequence, StageTimings};
 use crate::classify::boundary::BeamPlanes;
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{
-    BeamHits, Class, Classifier, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, WorldSupport,
+    BeamHits, Class, Classifier, Decisions, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap,
+    WorldSupport,
 };
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
@@ -195,27 +196,28 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         ..input(k)
     };
     let bar = crate::progress::bar(sequence.len(), "classify");
-    let classified: Vec<(Vec<Class>, std::time::Duration)> = (0..sequence.len())
+    let classified: Vec<(Decisions, std::time::Duration)> = (0..sequence.len())
         .into_par_iter()
         .map(|k| {
             let start = Instant::now();
-            let classes = classifier.classify(&FrameInput {
+            let decisions = classifier.classify(&FrameInput {
                 support: support.as_ref(),
                 space: space.as_ref(),
                 beam_hits: hits.get(k),
                 ..input(k)
             });
             bar.inc(1);
-            (classes, start.elapsed())
+            (decisions, start.elapsed())
         })
         .collect();
     bar.finish_and_clear();
     let mut frames = Vec::with_capacity(sequence.len());
-    for (k, (classes, d)) in classified.into_iter().enumerate() {
+    for (k, (decisions, d)) in classified.into_iter().enumerate() {
         timings.add("classify", d);
         frames.push(FrameOutput {
             name: sequence.frames[k].name.clone(),
-            classes,
+            classes: decisions.classes,
+            rules: decisions.rules,
             planes: per_frame[k].1.planes.len(),
             candidates: per_frame[k].1.candidates.len(),
         });

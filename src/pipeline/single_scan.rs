@@ -86,7 +86,7 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
             let (scan, detection, mut t) =
                 organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
             let start = Instant::now();
-            let classes = classifier.classify(&FrameInput {
+            let decisions = classifier.classify(&FrameInput {
                 beam_hits: None,
                 frame,
                 scan: &scan,
@@ -102,7 +102,8 @@ pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput
             Ok((
                 FrameOutput {
                     name: frame.name.clone(),
-                    classes,
+                    classes: decisions.classes,
+                    rules: decisions.rules,
                     planes: detection.planes.len(),
                     candidates: detection.candidates.len(),
                 },

@@ -4,7 +4,7 @@
 //!
 //! | topic | schema | per frame |
 //! |---|---|---|
-//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32 |
+//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32, `rule` u8 (which rule decided the class, `classify::Rule`) |
 //! | `/mirrored` | `foxglove.PointCloud` | the frame's reflections mirrored back through their plane (`map` frame) |
 //! | `/planes` | `foxglove.SceneUpdate` | each reflective landmark: translucent hull and panes, outlined |
 //! | `/tf` | `foxglove.FrameTransform` | `map` → `lidar` (the sensor pose) |
@@ -25,7 +25,7 @@ use foxglove::{ChannelBuilder, Context, McapWriter};
 use nalgebra::{Isometry3, Point3};
 
 use crate::classify::mirror::mirror_reflections;
-use crate::classify::Class;
+use crate::classify::{Class, Rule};
 use crate::pipeline::Sequence;
 use crate::reflect::{planes_seen_from, BoundedPlane};
 use crate::{Error, Result};
@@ -34,8 +34,9 @@ use crate::{Error, Result};
 pub const WORLD_FRAME: &str = "map";
 /// The sensor frame's id in the recording.
 pub const SENSOR_FRAME: &str = "lidar";
-/// Bytes per point on `/cloud`: x, y, z (f32), class (u8), intensity (f32).
-const CLOUD_STRIDE: u32 = 17;
+/// Bytes per point on `/cloud`: x, y, z (f32), class (u8), intensity (f32),
+/// rule (u8).
+const CLOUD_STRIDE: u32 = 18;
 /// Bytes per point on `/mirrored`: x, y, z (f32), class (u8).
 const MIRRORED_STRIDE: u32 = 13;
 
@@ -47,6 +48,9 @@ pub struct McapRun<'a> {
     pub sequence: &'a Sequence,
     /// One class per point, per frame.
     pub classes: &'a [Vec<Class>],
+    /// The rule that decided each point, per frame (an empty vector where
+    /// unknown: the field then reads 0, "undecided").
+    pub rules: &'a [Vec<Rule>],
     /// Reflective planes, world frame.
     pub planes: &'a [BoundedPlane],
     /// Hull margin used to mirror reflections back (metres).
@@ -131,13 +135,15 @@ fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<
         let stamp = Timestamp::saturating_from_epoch_secs_f64(frame.stamp);
         let t = stamp.total_nanos();
         let classes = &run.classes[k];
+        let rules = run.rules.get(k).map_or(&[][..], |r| r.as_slice());
 
         // Classified cloud, world frame.
         let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
-        for (pt, class) in frame.points.iter().zip(classes) {
+        for (i, (pt, class)) in frame.points.iter().zip(classes).enumerate() {
             push_xyz(&mut data, &(pose * pt.position()));
             data.push(class.id());
             data.extend_from_slice(&pt.intensity.to_le_bytes());
+            data.push(rules.get(i).map_or(0, |r| r.id()));
         }
         summary.cloud_points += frame.points.len();
         cloud.log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
@@ -209,6 +215,7 @@ fn point_cloud(stamp: Timestamp, data: Vec<u8>, stride: u32, intensity: bool) ->
     ];
     if intensity {
         fields.push(field("intensity", 13, NumericType::Float32));
+        fields.push(field("rule", 17, NumericType::Uint8));
     }
     PointCloud {
         timestamp: Some(stamp),
@@ -389,6 +396,7 @@ mod tests {
                         &McapRun {
                             sequence: &seq,
                             classes: &classes,
+                            rules: &[],
                             planes: &planes,
                             hull_margin: 0.0,
                         },
@@ -413,6 +421,7 @@ mod tests {
             &McapRun {
                 sequence: &seq,
                 classes: &classes,
+                rules: &[],
                 planes: &[],
                 hull_margin: 0.0,
             },
@@ -430,6 +439,7 @@ mod tests {
             &McapRun {
                 sequence: &seq,
                 classes: &[],
+                rules: &[],
                 planes: &[],
                 hull_margin: 0.0,
             },

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::classify::RuleTally;
 use crate::eval::Metrics;
 use crate::io::write_atomic;
 use crate::Result;
@@ -18,6 +19,8 @@ pub struct Report<'a> {
     pub config_toml: String,
     /// Scores, when the frames carry labels.
     pub metrics: Option<&'a Metrics>,
+    /// Points by the rule that decided them, their prediction and label.
+    pub rules: Option<&'a RuleTally>,
     /// Free lines shown under the title (frames, landmarks, ...).
     pub summary: Vec<String>,
     /// Plots: (caption, file name relative to the report).
@@ -62,6 +65,11 @@ impl Report<'_> {
             ));
             s.push_str("### Confusion matrix\n\nEvery point by its 3DRef label (rows) and the predicted class (columns), ignored labels included:\n\n");
             s.push_str(&m.confusion.label_table());
+            s.push('\n');
+        }
+        if let Some(rules) = self.rules {
+            s.push_str("## Which rule decided\n\nPoints by the rule of the decision procedure that gave them their class, the class given, and their 3DRef label (columns; all 0 for unlabelled frames). The Foxglove recording carries the rule of every point as the `rule` field of `/cloud` (ids in `classify::Rule`).\n\n");
+            s.push_str(&rules.table());
             s.push('\n');
         }
         if !self.plots.is_empty() {
