@@ -78,6 +78,13 @@ pub struct DecisionParams {
     /// A single echo on a reflective plane that is brighter than the plane's
     /// glass echoes (see the evidence grid) is an opaque surface (Normal).
     pub wall_echo_test: bool,
+    /// A single echo on a reflective plane met more than this many degrees
+    /// from the plane's normal, and brighter than the plane's typical glass
+    /// echo, is an opaque surface (a mullion, a sill, a wall strip): glass
+    /// returns a weak echo of its own away from normal incidence, and a
+    /// beam through glass usually brings back a second return from behind
+    /// (0: off).
+    pub oblique_single_echo_deg: f64,
     /// Test both hypotheses of a behind-plane point against the space seen
     /// directly over the sequence ([`SpaceMap`](super::space::SpaceMap)):
     /// real where measured, or the mirror image of a real point. A
@@ -113,6 +120,7 @@ impl Default for DecisionParams {
             dual_gap: 0.1,
             ambiguous: Class::Unclassified,
             wall_echo_test: false,
+            oblique_single_echo_deg: 0.0,
             space_test: false,
             space_margin: 0.2,
             space_clearance_ratio: 0.0,
@@ -133,6 +141,7 @@ enum Beam {
     Clear,
     Surface,
     WallEcho,
+    Oblique,
     Front,
     Band,
     Behind { plane: u16 },
@@ -251,6 +260,11 @@ pub fn decide_with_hits(
     space: Option<&SensorFrameSpace<'_>>,
 ) -> Decisions {
     let n = frame.points.len();
+    let oblique_cos = if params.oblique_single_echo_deg > 0.0 {
+        params.oblique_single_echo_deg.to_radians().cos()
+    } else {
+        -1.0
+    };
     // 1. Beam test.
     let beams: Vec<Beam> = frame
         .points
@@ -266,6 +280,18 @@ pub fn decide_with_hits(
                         // A single echo as bright as a wall is the wall.
                         let single = scan.partner(i).is_none();
                         let cos = bounded[k].plane.normal.dot(&p.coords) / p.coords.norm();
+                        // Far from normal incidence a single echo brighter
+                        // than the plane's typical glass echo is opaque.
+                        let glass_echo = bounded[k]
+                            .evidence
+                            .as_ref()
+                            .and_then(|e| e.glass_echo_intensity);
+                        if single
+                            && cos.abs() < oblique_cos
+                            && glass_echo.is_none_or(|m| pt.intensity > m)
+                        {
+                            return Beam::Oblique;
+                        }
                         match &bounded[k].evidence {
                             Some(e)
                                 if params.wall_echo_test
@@ -293,6 +319,7 @@ pub fn decide_with_hits(
             Beam::Clear => (Class::Normal, Rule::NoPane),
             Beam::Front => (Class::Normal, Rule::InFront),
             Beam::WallEcho => (Class::Normal, Rule::WallEcho),
+            Beam::Oblique => (Class::Normal, Rule::ObliqueEcho),
             Beam::Surface => (Class::Glass, Rule::OnPane),
             Beam::Band => (Class::Unclassified, Rule::Band),
             Beam::Behind { .. } => (Class::Unclassified, Rule::Undecided),
@@ -506,16 +533,21 @@ fn two_hypotheses(
         // A path towards an observed surface is not refuted by a voxel it
         // clips on the way: voxels are coarser than chair legs and desk
         // edges. A path into space nobody saw, through a seen surface, is.
-        if support.is_some_and(|s| s.near(end, support_radius)) {
-            return false;
-        }
         let start = x + dir * (start_t / len);
-        space.blocked(&start, end, margin)
+        space.blocked(&start, end, margin) && !support.is_some_and(|s| s.near(end, support_radius))
     };
-    match (refuted(p), refuted(&mirrored)) {
-        (false, true) => Verdict::Real,
-        (true, false) => Verdict::Mirror,
-        _ => Verdict::Open,
+    // The second hypothesis matters only when the first is refuted, and
+    // the other way round: test the cheaper order and stop early.
+    if refuted(p) {
+        if refuted(&mirrored) {
+            Verdict::Open
+        } else {
+            Verdict::Mirror
+        }
+    } else if refuted(&mirrored) {
+        Verdict::Real
+    } else {
+        Verdict::Open
     }
 }
 
@@ -774,6 +806,35 @@ mod tests {
             classify(&points, 9.8, &planes, &params),
             [Class::Unclassified]
         );
+    }
+
+    /// A mullion on the pane's plane: a single echo met 60 degrees off the
+    /// normal is opaque (Normal) with the rule on, glass without; near
+    /// normal incidence the same echo stays glass.
+    #[test]
+    fn an_oblique_single_echo_on_the_pane_is_a_mullion() {
+        let planes = pane();
+        let on = DecisionParams {
+            oblique_single_echo_deg: 30.0,
+            ..rule_only(false)
+        };
+        // At (5, 8.66, 0): 60 degrees from the pane's normal (the pane is
+        // widened to hold it).
+        let plane = planes[0].plane;
+        let wide = vec![BoundedPlane::from_points(
+            plane,
+            [(-10.0, -1.0), (10.0, -1.0), (10.0, 2.0), (-10.0, 2.0)]
+                .iter()
+                .map(|&(y, z)| Point3::new(5.0, y, z)),
+        )];
+        let oblique = [[5.0f32, 8.66, 0.0]];
+        assert_eq!(classify(&oblique, 50.0, &wide, &on), [Class::Normal]);
+        assert_eq!(
+            classify(&oblique, 50.0, &wide, &rule_only(false)),
+            [Class::Glass]
+        );
+        let normal = [[5.0f32, 0.3, 0.2]];
+        assert_eq!(classify(&normal, 50.0, &wide, &on), [Class::Glass]);
     }
 
     /// A beam through two panes is left to the frame's own tests: the first

@@ -31,6 +31,9 @@ pub struct PlaneMapParams {
     pub space_min_passes: u8,
     /// Returns from a voxel needed before it blocks a path.
     pub space_block_hits: u8,
+    /// One beam column in this many carves free space (all mark surfaces):
+    /// neighbouring beams pass nearly the same voxels.
+    pub space_column_stride: usize,
     /// Carving stops this share of the range before a beam's endpoint (and
     /// at least two voxels): beam footprint and grazing incidence.
     pub space_stop_ratio: f64,
@@ -56,6 +59,7 @@ impl Default for PlaneMapParams {
             space_voxel: 0.1,
             space_min_passes: 2,
             space_block_hits: 5,
+            space_column_stride: 1,
             space_stop_ratio: 0.05,
             space_keyframe_move: 0.25,
             space_keyframe_turn_deg: 10.0,

@@ -47,10 +47,13 @@ pub enum Rule {
     /// The near return of a beam whose far return is an Obstacle:
     /// Reflection.
     DualReturn = 12,
+    /// On the pane, but a single echo met far from normal incidence, where
+    /// glass gives none: Normal.
+    ObliqueEcho = 13,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 13] = [
+pub const RULES: [Rule; 14] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -64,6 +67,7 @@ pub const RULES: [Rule; 13] = [
     Rule::EchoStrength,
     Rule::Support,
     Rule::DualReturn,
+    Rule::ObliqueEcho,
 ];
 
 impl Rule {
@@ -88,6 +92,7 @@ impl Rule {
             Rule::EchoStrength => "echo-strength",
             Rule::Support => "support",
             Rule::DualReturn => "dual-return",
+            Rule::ObliqueEcho => "oblique-echo",
         }
     }
 }

@@ -51,6 +51,9 @@ pub struct EvidenceGrid {
     /// Single echoes on the plane brighter than this are from an opaque
     /// surface (set from the plane's own glass echoes; `None`: unknown).
     pub opaque_intensity: Option<f32>,
+    /// The median intensity of the plane's glass echoes (surface echoes with
+    /// a return behind the plane), when it has any.
+    pub glass_echo_intensity: Option<f32>,
     /// Echoes within this cosine of normal incidence are exempt from the
     /// intensity test (glass peaks there like a wall).
     pub peak_cos: f64,
@@ -89,6 +92,7 @@ impl EvidenceGrid {
             echo_reach: 0.0,
             min_votes,
             opaque_intensity: None,
+            glass_echo_intensity: None,
             peak_cos: 1.0,
             states: Vec::new(),
         })

@@ -141,7 +141,9 @@ pub fn gather_evidence(
     // Single echoes on the plane: opaque when brighter than the landmark's
     // glass echoes by the ratio, glass otherwise (all opaque when the
     // landmark has no dual-return glass echo to compare with).
-    let threshold = median(&mut glass_echoes).map(|m| m * params.opaque_intensity_ratio);
+    let glass_median = median(&mut glass_echoes);
+    total.glass_echo_intensity = glass_median.map(|m| m as f32);
+    let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);
     total.opaque_intensity = threshold.map(|t| t as f32);
     total.peak_cos = params.peak_angle_deg.to_radians().cos();
     for (_, v) in &partial {

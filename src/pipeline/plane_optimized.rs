@@ -311,6 +311,7 @@ fn seen_space<'a>(
     let glass = p.decision.glass_distance;
     let mut space = SpaceMap::new(p.space_voxel, p.space_min_passes, p.space_block_hits);
     let min_stop = 2.0 * space.voxel();
+    let stride = p.space_column_stride.max(1);
     for &k in frames {
         let inp = input(k);
         let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
@@ -335,7 +336,13 @@ fn seen_space<'a>(
                 _ => (range, true),
             };
             let end = Point3::from(r * (pos.coords * (end_range / range)) + t);
-            let stop = min_stop.max(p.space_stop_ratio * range);
+            // Every beam marks its surface; one in `stride` columns carves.
+            let (_, col) = inp.scan.ring_column(inp.scan.cell_of(i));
+            let stop = if col % stride == 0 {
+                min_stop.max(p.space_stop_ratio * range)
+            } else {
+                f64::INFINITY
+            };
             space.add_beam(&origin, &end, stop, hit);
         }
     }
