@@ -1,19 +1,33 @@
 //! The decision procedure shared by the classifiers (the paper's "Global
 //! Point Classification", applicable to one frame against any set of
-//! bounded reflective planes).
+//! bounded reflective planes). Each point also gets the [`Rule`] that
+//! decided it.
 //!
 //! 1. Beam test: a point whose beam crosses no reflective plane inside its
 //!    boundary is Normal. Otherwise, by its range `r` against the range `t`
 //!    at which the beam crosses the first plane: `|r - t| <= glass_distance`
-//!    is Glass, `r < t` is Normal (in front), and `r > t + behind_distance`
-//!    is behind the plane: a Reflection or an Obstacle.
-//! 2. Behind-plane points are split by evidence, obstacle tests first:
+//!    is Glass (unless it is a single echo as bright as a wall, or a single
+//!    echo far from normal incidence and brighter than the plane's glass
+//!    echoes: a mullion or sill), `r < t` is Normal (in front), and
+//!    `r > t + behind_distance` is behind the plane: a Reflection or an
+//!    Obstacle.
+//! 2. Behind-plane points are split by evidence, strongest first:
+//!    - mirror: behind a landmark that transmits nothing, nothing is real;
+//!    - two hypotheses against the space seen directly over the sequence
+//!      (when the beam crossed one pane only): real where measured, or the
+//!      mirror image of a real point; a hypothesis is refuted when its
+//!      endpoint lies in seen-free space or its path runs through a seen
+//!      surface, and when exactly one is refuted the other decides;
 //!    - depth: a reflection appears as deep behind the plane as its real
 //!      object stands in front, so a point deeper than every point seen in
 //!      front is an Obstacle;
-//!    - free space: mirrored through the plane, a reflection lands on a real
-//!      surface; if the scan saw *through* that place (a return farther along
-//!      the mirrored point's own beam) the point is an Obstacle;
+//!    - free space in the frame: mirrored through the plane, a reflection
+//!      lands on a real surface; if the scan saw *through* that place (a
+//!      return farther along the mirrored point's own beam) the point is an
+//!      Obstacle;
+//!    - echo strength: where the landmark's echoes behind it fall in two
+//!      groups, the weak one reflected and the strong one transmitted (or
+//!      the other way round, as its anchors say);
 //!    - support: if the mirrored point lands on an observed surface (a return
 //!      at that range in its beam, or a Normal point within a radius) it is a
 //!      Reflection;
@@ -370,6 +384,11 @@ pub fn decide_with_hits(
                 r - params.behind_distance,
             )
         };
+        // Behind a mirror nothing is real.
+        if bp.mirror && single_pane {
+            (classes[i], rules[i]) = (Class::Reflection, Rule::BehindMirror);
+            continue;
+        }
         if let Some(space) = space.filter(|_| params.space_test && single_pane) {
             match two_hypotheses(
                 space,
@@ -835,6 +854,23 @@ mod tests {
         );
         let normal = [[5.0f32, 0.3, 0.2]];
         assert_eq!(classify(&normal, 50.0, &wide, &on), [Class::Glass]);
+    }
+
+    /// Behind a mirror landmark every point is a Reflection, whatever the
+    /// space says (a box behind it that the space calls real).
+    #[test]
+    fn behind_a_mirror_nothing_is_real() {
+        let mut planes = pane();
+        let points = [[5.5f32, 0.2, 0.3]];
+        assert_eq!(
+            classify(&points, 50.0, &planes, &rule_only(true)),
+            [Class::Obstacle]
+        );
+        planes[0].mirror = true;
+        assert_eq!(
+            classify(&points, 50.0, &planes, &rule_only(true)),
+            [Class::Reflection]
+        );
     }
 
     /// A beam through two panes is left to the frame's own tests: the first

@@ -50,10 +50,12 @@ pub enum Rule {
     /// On the pane, but a single echo met far from normal incidence, where
     /// glass gives none: Normal.
     ObliqueEcho = 13,
+    /// Behind a landmark that transmits nothing (a mirror): Reflection.
+    BehindMirror = 14,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 14] = [
+pub const RULES: [Rule; 15] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -68,6 +70,7 @@ pub const RULES: [Rule; 14] = [
     Rule::Support,
     Rule::DualReturn,
     Rule::ObliqueEcho,
+    Rule::BehindMirror,
 ];
 
 impl Rule {
@@ -93,6 +96,7 @@ impl Rule {
             Rule::Support => "support",
             Rule::DualReturn => "dual-return",
             Rule::ObliqueEcho => "oblique-echo",
+            Rule::BehindMirror => "behind-mirror",
         }
     }
 }

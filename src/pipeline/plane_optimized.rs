@@ -28,7 +28,7 @@ use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
-use crate::reflect::echo_split::echo_strength;
+use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{planes_seen_from, BoundedPlane, Detection, EchoHistogram, EchoSplit};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
@@ -184,8 +184,9 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         Some(splits) => map_planes
             .iter()
             .zip(splits)
-            .map(|(bp, echo_split)| BoundedPlane {
+            .map(|(bp, (echo_split, mirror))| BoundedPlane {
                 echo_split,
+                mirror,
                 ..bp.clone()
             })
             .collect(),
@@ -350,16 +351,17 @@ fn seen_space<'a>(
 }
 
 /// Each map plane's split of echoes behind it into reflected and
-/// transmitted ones ([`EchoSplit`]), from the keyframes `frames`: the
-/// strengths of every point behind the plane, oriented by the points whose
-/// mirror image lies in seen-free space (they cannot be reflections).
+/// transmitted ones ([`EchoSplit`]), and whether it is a mirror, from the
+/// keyframes `frames`: the strengths of every point behind the plane,
+/// oriented by the points whose mirror image lies in seen-free space (they
+/// cannot be reflections; a plane with almost none is a mirror).
 fn fit_echo_splits<'a>(
     classifier: &PlaneMapClassifier,
     frames: &[usize],
     hits: &[BeamHits],
     input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
     space: &SpaceMap,
-) -> Vec<Option<EchoSplit>> {
+) -> Vec<(Option<EchoSplit>, bool)> {
     let p = classifier.params();
     let behind = p.decision.behind_distance;
     let glass = p.decision.glass_distance;
@@ -405,14 +407,16 @@ fn fit_echo_splits<'a>(
                 anchors.merge(&f[j].1);
             }
             let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
+            let mirror = is_mirror(&all, &anchors, &p.echo_split);
             tracing::debug!(
                 plane = j,
                 behind = all.total(),
                 anchors = anchors.total(),
                 ?split,
+                mirror,
                 "echo split"
             );
-            split
+            (split, mirror)
         })
         .collect()
 }

@@ -42,6 +42,13 @@ pub struct EchoSplitParams {
     /// Points within this many decades of the threshold are left to the
     /// other tests.
     pub band: f64,
+    /// A landmark is a mirror when at most this share of the points behind
+    /// it are anchors (transmitted for sure), over at least
+    /// `mirror_min_behind` points: glass transmits, a mirror never does
+    /// (0: never a mirror).
+    pub mirror_max_anchor_share: f64,
+    /// Points behind a landmark needed to call it a mirror.
+    pub mirror_min_behind: u64,
 }
 
 impl Default for EchoSplitParams {
@@ -53,6 +60,8 @@ impl Default for EchoSplitParams {
             min_anchors: 30,
             min_anchor_agreement: 0.75,
             band: 0.1,
+            mirror_max_anchor_share: 0.0,
+            mirror_min_behind: 1000,
         }
     }
 }
@@ -142,6 +151,16 @@ impl EchoHistogram {
 
 fn centre(bin: usize) -> f64 {
     LOG_MIN + (bin as f64 + 0.5) * BIN
+}
+
+/// Whether the points behind a landmark say it is a mirror: many points,
+/// and almost none of them transmitted for sure (their mirror image lies in
+/// space seen free).
+pub fn is_mirror(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitParams) -> bool {
+    let n = all.total();
+    p.mirror_max_anchor_share > 0.0
+        && n >= p.mirror_min_behind
+        && (anchors.total() as f64) <= p.mirror_max_anchor_share * n as f64
 }
 
 /// A landmark's learned split between transmitted and reflected echoes.
@@ -236,5 +255,23 @@ mod tests {
         // One group: no split.
         let one = histogram(strong.iter().copied());
         assert!(EchoSplit::fit(&one, &anchors, &p).is_none());
+    }
+
+    /// Many points behind a landmark and none transmitted for sure: a
+    /// mirror; a few anchors, too few points, or the test off: not.
+    #[test]
+    fn a_landmark_that_transmits_nothing_is_a_mirror() {
+        let p = EchoSplitParams {
+            mirror_max_anchor_share: 0.002,
+            ..EchoSplitParams::default()
+        };
+        let all = histogram((0..5000).map(|k| 2.0 + (k % 50) as f64 * 0.02));
+        assert!(is_mirror(&all, &EchoHistogram::default(), &p));
+        assert!(is_mirror(&all, &histogram([3.0; 10]), &p));
+        assert!(!is_mirror(&all, &histogram([3.0; 50]), &p));
+        let few = histogram([3.0; 500]);
+        assert!(!is_mirror(&few, &EchoHistogram::default(), &p));
+        let off = EchoSplitParams::default();
+        assert!(!is_mirror(&all, &EchoHistogram::default(), &off));
     }
 }

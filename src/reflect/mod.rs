@@ -43,6 +43,9 @@ pub struct BoundedPlane {
     /// How the echoes behind this plane split into reflected and
     /// transmitted ones by strength, when learned.
     pub echo_split: Option<EchoSplit>,
+    /// Whether the plane is a mirror: beams behind it never came back
+    /// transmitted, so nothing behind it is real.
+    pub mirror: bool,
 }
 
 impl BoundedPlane {
@@ -57,6 +60,7 @@ impl BoundedPlane {
             evidence: None,
             panes: None,
             echo_split: None,
+            mirror: false,
         }
     }
 
@@ -141,6 +145,7 @@ impl BoundedPlane {
             evidence: self.evidence.clone(),
             panes: self.panes.clone(),
             echo_split: self.echo_split,
+            mirror: self.mirror,
         }
     }
 
