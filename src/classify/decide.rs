@@ -389,7 +389,24 @@ pub fn decide_with_hits(
             (classes[i], rules[i]) = (Class::Reflection, Rule::BehindMirror);
             continue;
         }
-        if let Some(space) = space.filter(|_| params.space_test && single_pane) {
+        let mirrored = bp.plane.mirror(&p);
+        let along_beam = if params.free_space_test || params.support_test {
+            returns_along(
+                scan,
+                sensor,
+                frame,
+                &mirrored,
+                params.free_space_neighbourhood,
+            )
+        } else {
+            None
+        };
+        let mirrored_range = mirrored.coords.norm();
+        // The frame's own return where the mirror image lies confirms the
+        // mirror hypothesis: the space test has nothing to add.
+        let on_beam = along_beam
+            .is_some_and(|(closest, _)| (closest - mirrored_range).abs() <= params.support_range);
+        if let Some(space) = space.filter(|_| params.space_test && single_pane && !on_beam) {
             match two_hypotheses(
                 space,
                 support,
@@ -419,19 +436,6 @@ pub fn decide_with_hits(
             (classes[i], rules[i]) = (Class::Obstacle, Rule::Depth);
             continue;
         }
-        let mirrored = bp.plane.mirror(&p);
-        let along_beam = if params.free_space_test || params.support_test {
-            returns_along(
-                scan,
-                sensor,
-                frame,
-                &mirrored,
-                params.free_space_neighbourhood,
-            )
-        } else {
-            None
-        };
-        let mirrored_range = mirrored.coords.norm();
         if tests_apply && params.free_space_test {
             if let Some((_, far)) = along_beam {
                 if far > mirrored_range + params.free_space_margin {
@@ -458,9 +462,6 @@ pub fn decide_with_hits(
             continue;
         }
         if params.support_test {
-            let on_beam = along_beam.is_some_and(|(closest, _)| {
-                (closest - mirrored_range).abs() <= params.support_range
-            });
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {

@@ -38,6 +38,8 @@ struct Brick {
     passes: [u8; VOXELS],
     /// Voxels with at least one hit: queries skip bricks of pure air.
     hit_voxels: u16,
+    /// Voxels with enough hits to block a path.
+    solid_voxels: u16,
 }
 
 impl Brick {
@@ -46,6 +48,7 @@ impl Brick {
             hits: [0; VOXELS],
             passes: [0; VOXELS],
             hit_voxels: 0,
+            solid_voxels: 0,
         })
     }
 }
@@ -186,9 +189,13 @@ impl SpaceMap {
         }
         if hit {
             let (key, local) = split(self.voxel_of(end));
+            let block_hits = self.block_hits;
             let brick = self.brick_mut(key);
             if brick.hits[local] == 0 {
                 brick.hit_voxels += 1;
+            }
+            if brick.hits[local] == block_hits - 1 {
+                brick.solid_voxels += 1;
             }
             brick.hits[local] = brick.hits[local].saturating_add(1);
         }
@@ -266,7 +273,7 @@ impl SpaceMap {
                 return false;
             };
             let brick = &self.bricks[index as usize];
-            if brick.hit_voxels == 0 {
+            if brick.solid_voxels == 0 {
                 return false;
             }
             let entry = start + dir * t0;

@@ -156,24 +156,24 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         support = Some(sequence_support(&classifier, &views, &hits, &input));
         timings.add("support", start.elapsed());
     }
+    // The space seen directly and the echo statistics behind each landmark,
+    // both from the same keyframes.
+    let space_views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
     if p.decision.space_test {
         let start = Instant::now();
-        let views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
-        space = Some(seen_space(&classifier, &views, &hits, &input));
+        let map = seen_space(&classifier, &space_views, &hits, &input);
         timings.add("space", start.elapsed());
-        if let Some(s) = &space {
-            tracing::info!(
-                keyframes = views.len(),
-                bricks = s.bricks(),
-                "space seen directly"
-            );
-        }
+        tracing::info!(
+            keyframes = space_views.len(),
+            bricks = map.bricks(),
+            "space seen directly"
+        );
+        space = Some(map);
     }
     let splits = match (&space, p.echo_split.enabled) {
         (Some(space), true) => {
             let start = Instant::now();
-            let views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
-            let splits = fit_echo_splits(&classifier, &views, &hits, &input, space);
+            let splits = fit_echo_splits(&classifier, &space_views, &hits, &input, space);
             timings.add("echo split", start.elapsed());
             Some(splits)
         }
@@ -367,15 +367,18 @@ fn fit_echo_splits<'a>(
     let glass = p.decision.glass_distance;
     let clearance = p.decision.space_clearance_ratio;
     let exponent = p.echo_split.range_exponent;
-    let n = input(0).map_planes.len();
-    let per_frame: Vec<Vec<(EchoHistogram, EchoHistogram)>> = frames
+    let n = frames.first().map_or(0, |&k| input(k).map_planes.len());
+    // Per landmark: the strengths of all points behind it, and of its
+    // anchors; summed over the keyframes by each worker, then merged (the
+    // counts are integers, so the result does not depend on the threads).
+    let empty = || vec![(EchoHistogram::default(), EchoHistogram::default()); n];
+    let totals = frames
         .par_iter()
-        .map(|&k| {
+        .fold(empty, |mut out, &k| {
             let inp = input(k);
             let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
             let view = space.in_sensor_frame(inp.pose);
             let beams = BeamPlanes::hulls(&planes, p.hull_margin);
-            let mut out = vec![(EchoHistogram::default(), EchoHistogram::default()); n];
             for (i, pt) in inp.frame.points.iter().enumerate() {
                 let pos = pt.position();
                 let Some(h) = hits[k].get(i, &pos, &planes) else {
@@ -398,14 +401,17 @@ fn fit_echo_splits<'a>(
             }
             out
         })
-        .collect();
-    (0..n)
-        .map(|j| {
-            let (mut all, mut anchors) = (EchoHistogram::default(), EchoHistogram::default());
-            for f in &per_frame {
-                all.merge(&f[j].0);
-                anchors.merge(&f[j].1);
+        .reduce(empty, |mut a, b| {
+            for ((all, anchors), (all_b, anchors_b)) in a.iter_mut().zip(&b) {
+                all.merge(all_b);
+                anchors.merge(anchors_b);
             }
+            a
+        });
+    totals
+        .into_iter()
+        .enumerate()
+        .map(|(j, (all, anchors))| {
             let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
             let mirror = is_mirror(&all, &anchors, &p.echo_split);
             tracing::debug!(
