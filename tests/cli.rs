@@ -58,8 +58,29 @@ fn detect_then_eval_on_the_sample() {
         assert_eq!(labels.len(), frame.points.len());
         assert!(labels.iter().all(|l| [0, 1, 2, 5, 6].contains(l)));
     }
-    assert!(out.path().join("metrics.json").exists());
     assert!(out.path().join("config.toml").exists());
+    // metrics.json: the whole confusion matrix by label id, and which rule
+    // decided how many points, both adding up to every point.
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("metrics.json")).unwrap())
+            .unwrap();
+    // The sum of every count in a nested JSON value.
+    fn total(v: &serde_json::Value) -> u64 {
+        match v {
+            serde_json::Value::Number(n) => n.as_u64().unwrap(),
+            serde_json::Value::Array(a) => a.iter().map(total).sum(),
+            serde_json::Value::Object(o) => o.values().map(total).sum(),
+            _ => 0,
+        }
+    }
+    let points = metrics["points"].as_u64().unwrap() + metrics["ignored"].as_u64().unwrap();
+    assert_eq!(total(&metrics["confusion"]["by_label"]), points);
+    assert_eq!(total(&metrics["rules"]), points);
+    assert!(
+        metrics["rules"].get("no-pane/normal").is_some(),
+        "{}",
+        metrics["rules"]
+    );
     let e = specular(&[
         "eval",
         "--frames",

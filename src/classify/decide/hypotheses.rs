@@ -1,0 +1,79 @@
+//! The two hypotheses of a point behind a pane, tested against the space
+//! seen directly over the sequence: real where it was measured, or the
+//! mirror image of a real point in front of the pane.
+
+use nalgebra::Point3;
+
+use super::SurfaceSupport;
+use crate::classify::boundary::beam_crossing;
+use crate::classify::space::{Occupancy, SensorFrameSpace};
+
+/// What the directly seen space says about a behind-plane point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Verdict {
+    /// Only the mirror hypothesis survives: a Reflection.
+    Mirror,
+    /// Only the real hypothesis survives: an Obstacle seen through glass.
+    Real,
+    /// Both or neither survive: the frame's own tests decide.
+    Open,
+}
+
+/// The two hypotheses of point `p` (sensor frame) behind `plane`: real where
+/// measured, reached straight through the plane, or the mirror image of a
+/// real point reached by reflection at the plane. Each is refuted when its
+/// endpoint lies in seen-free space or its leg beyond the crossing runs
+/// through a seen surface (tested from `margin` off the plane to `margin`
+/// before the endpoint).
+pub(super) fn two_hypotheses(
+    space: &SensorFrameSpace<'_>,
+    support: Option<&dyn SurfaceSupport>,
+    support_radius: f64,
+    plane: &crate::geometry::Plane,
+    p: &Point3<f64>,
+    margin: f64,
+    clearance_ratio: f64,
+) -> Verdict {
+    let range = p.coords.norm();
+    let Some(t) = beam_crossing(plane, p) else {
+        return Verdict::Open;
+    };
+    let x = Point3::from(p.coords * (t / range));
+    let mirrored = plane.mirror(p);
+    let clearance = clearance_ratio * range;
+    let refuted = |end: &Point3<f64>| {
+        if space.occupancy_clear_of(end, clearance) == Occupancy::Free {
+            return true;
+        }
+        // Start where the leg is `margin` off the plane: a leg at a grazing
+        // angle runs along the frames and wall strips beside the pane.
+        let dir = end - x;
+        let len = dir.norm();
+        if !(len > 0.0) {
+            return false;
+        }
+        let off = plane.normal.dot(&dir).abs() / len;
+        let start_t = if off > 1e-9 { margin / off } else { len };
+        if start_t + margin >= len {
+            return false;
+        }
+        // A path towards an observed surface is not refuted by a voxel it
+        // clips on the way: voxels are coarser than chair legs and desk
+        // edges. A path into space nobody saw, through a seen surface, is.
+        let start = x + dir * (start_t / len);
+        space.blocked(&start, end, margin) && !support.is_some_and(|s| s.near(end, support_radius))
+    };
+    // The second hypothesis matters only when the first is refuted, and
+    // the other way round: test the cheaper order and stop early.
+    if refuted(p) {
+        if refuted(&mirrored) {
+            Verdict::Open
+        } else {
+            Verdict::Mirror
+        }
+    } else if refuted(&mirrored) {
+        Verdict::Real
+    } else {
+        Verdict::Open
+    }
+}
