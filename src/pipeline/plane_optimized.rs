@@ -367,6 +367,7 @@ fn fit_echo_splits<'a>(
     let glass = p.decision.glass_distance;
     let clearance = p.decision.space_clearance_ratio;
     let exponent = p.echo_split.range_exponent;
+    let incidence = p.echo_split.incidence_correction;
     let n = frames.first().map_or(0, |&k| input(k).map_planes.len());
     // Per landmark: the strengths of all points behind it, and of its
     // anchors; summed over the keyframes by each worker, then merged (the
@@ -392,7 +393,12 @@ fn fit_echo_splits<'a>(
                 {
                     continue;
                 }
-                let strength = echo_strength(pt.intensity, range, exponent);
+                let cos = if incidence {
+                    inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
+                } else {
+                    1.0
+                };
+                let strength = echo_strength(pt.intensity, range, exponent, cos);
                 out[h.plane].0.add(strength);
                 let mirrored = planes[h.plane].plane.mirror(&pos);
                 if view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free {

@@ -32,6 +32,9 @@ pub struct EchoSplitParams {
     /// Echo strength is corrected by the range to this power (2 for a raw
     /// return power falling with the square of the range).
     pub range_exponent: f64,
+    /// Echo strength is corrected by the incidence on the surface hit
+    /// (its normal from the neighbouring beams).
+    pub incidence_correction: bool,
     /// The two groups' means must differ by this many decades.
     pub min_separation: f64,
     /// Anchors (points that cannot be reflections) needed to orient the
@@ -56,7 +59,8 @@ impl Default for EchoSplitParams {
         Self {
             enabled: false,
             range_exponent: 2.0,
-            min_separation: 0.5,
+            incidence_correction: false,
+            min_separation: 0.8,
             min_anchors: 30,
             min_anchor_agreement: 0.75,
             band: 0.1,
@@ -81,10 +85,15 @@ impl Default for EchoHistogram {
     }
 }
 
-/// The echo strength of a return of intensity `intensity` at `range` metres.
+/// The echo strength of a return of intensity `intensity` at `range` metres
+/// from a surface met at incidence cosine `cos` (1 when unknown): a
+/// Lambertian surface returns in proportion to `cos`, so dividing by it
+/// leaves the reflectivity (floors met at grazing incidence far away are
+/// not mistaken for weak reflections). The cosine is floored at 0.1.
 #[inline]
-pub fn echo_strength(intensity: f32, range: f64, range_exponent: f64) -> f64 {
+pub fn echo_strength(intensity: f32, range: f64, range_exponent: f64, cos: f64) -> f64 {
     (intensity.max(0.5) as f64).log10() + range_exponent * range.max(1e-3).log10()
+        - cos.clamp(0.1, 1.0).log10()
 }
 
 impl EchoHistogram {
@@ -172,6 +181,8 @@ pub struct EchoSplit {
     pub band: f64,
     /// The range exponent `k` the strengths use.
     pub range_exponent: f64,
+    /// Whether the strengths are corrected by the incidence on the surface.
+    pub incidence_correction: bool,
     /// Whether the weaker group is the reflections (glass: `R < T`).
     pub weak_is_reflection: bool,
 }
@@ -202,14 +213,16 @@ impl EchoSplit {
             threshold,
             band: p.band,
             range_exponent: p.range_exponent,
+            incidence_correction: p.incidence_correction,
             weak_is_reflection,
         })
     }
 
-    /// Whether a return of `intensity` at `range` was reflected (`Some(true)`),
-    /// transmitted (`Some(false)`), or is too close to the threshold to say.
-    pub fn reflected(&self, intensity: f32, range: f64) -> Option<bool> {
-        let s = echo_strength(intensity, range, self.range_exponent);
+    /// Whether a return of `intensity` at `range`, met at incidence cosine
+    /// `cos`, was reflected (`Some(true)`), transmitted (`Some(false)`), or
+    /// is too close to the threshold to say.
+    pub fn reflected(&self, intensity: f32, range: f64, cos: f64) -> Option<bool> {
+        let s = echo_strength(intensity, range, self.range_exponent, cos);
         if (s - self.threshold).abs() <= self.band {
             return None;
         }
@@ -243,8 +256,10 @@ mod tests {
         assert!(split.threshold > 2.3 && split.threshold < 3.5, "{split:?}");
         assert!(split.weak_is_reflection);
         // A weak echo at 10 m is a reflection, a strong one transmitted.
-        assert_eq!(split.reflected(1.0, 10.0), Some(true));
-        assert_eq!(split.reflected(100.0, 10.0), Some(false));
+        assert_eq!(split.reflected(1.0, 10.0, 1.0), Some(true));
+        assert_eq!(split.reflected(100.0, 10.0, 1.0), Some(false));
+        // A weak echo from a surface met at grazing incidence is not.
+        assert_eq!(split.reflected(5.0, 10.0, 0.1), Some(false));
         // Anchors on the weak side flip the orientation (strong mirrors).
         let flipped = EchoSplit::fit(&all, &histogram(weak.iter().take(100).copied()), &p);
         assert!(!flipped.expect("a split").weak_is_reflection);

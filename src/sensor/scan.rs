@@ -26,6 +26,41 @@ pub struct OrganizedScan {
 }
 
 impl OrganizedScan {
+    /// Cosine of the angle between point `point`'s beam and the surface it
+    /// hit, from its neighbours in the scan (left/right and up/down, the
+    /// return of each neighbouring beam nearest in range); `None` where the
+    /// neighbours do not span a surface.
+    pub fn incidence_cos(&self, frame: &Frame, point: usize) -> Option<f64> {
+        let p = frame.points.get(point)?.position();
+        let r0 = p.coords.norm();
+        let (ring, col) = self.ring_column(self.cell_of(point));
+        let near = |ring: isize, col: isize| {
+            if ring < 0 || ring as usize >= self.rings {
+                return None;
+            }
+            let cell = self.cell(ring as usize, col);
+            [self.first(cell), self.second(cell)]
+                .into_iter()
+                .flatten()
+                .map(|j| frame.points[j].position())
+                .filter(|q| (q.coords.norm() - r0).abs() <= 0.1 * r0 + 0.2)
+                .min_by(|a, b| {
+                    (a.coords.norm() - r0)
+                        .abs()
+                        .total_cmp(&(b.coords.norm() - r0).abs())
+                })
+        };
+        let (r, c) = (ring as isize, col as isize);
+        let across = near(r, c + 1).unwrap_or(p) - near(r, c - 1).unwrap_or(p);
+        let up = near(r + 1, c).unwrap_or(p) - near(r - 1, c).unwrap_or(p);
+        let n = across.cross(&up);
+        let norm = n.norm();
+        if !(norm > 1e-12) || !(r0 > 0.0) {
+            return None;
+        }
+        Some((n.dot(&p.coords) / (norm * r0)).abs())
+    }
+
     /// Organize `frame` on `sensor`'s grid. Errors (naming the frame) when a
     /// point's ring is outside the sensor's rings.
     pub fn build(frame: &Frame, sensor: &SensorModel) -> Result<Self> {
@@ -191,5 +226,51 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("ring 64") && e.contains("64 rings"), "{e}");
+    }
+
+    /// The incidence on a flat wall, from the neighbouring beams, matches
+    /// the angle between the beam and the wall's normal.
+    #[test]
+    fn incidence_on_a_flat_wall_matches_the_geometry() {
+        use crate::cloud::Point;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        // The wall y = 4 (normal along y), seen by every beam towards it.
+        let mut points = Vec::new();
+        for ring in 0..sensor.rings() {
+            for col in 0..600 {
+                let d = sensor.beam_direction(ring, col);
+                if d.y < 0.2 {
+                    continue;
+                }
+                let p = d * (4.0 / d.y);
+                if p.norm() > 20.0 {
+                    continue;
+                }
+                points.push(Point {
+                    xyz: [p.x as f32, p.y as f32, p.z as f32],
+                    intensity: 10.0,
+                    ring: ring as u16,
+                    ret: 1,
+                    label: 1,
+                });
+            }
+        }
+        let frame = Frame {
+            name: "wall".into(),
+            points,
+            ..Frame::default()
+        };
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let mut checked = 0;
+        for (i, pt) in frame.points.iter().enumerate() {
+            let Some(cos) = scan.incidence_cos(&frame, i) else {
+                continue;
+            };
+            let p = pt.position();
+            let truth = p.y / p.coords.norm();
+            assert!((cos - truth).abs() < 0.02, "point {i}: {cos} vs {truth}");
+            checked += 1;
+        }
+        assert!(checked > 1000, "{checked}");
     }
 }

@@ -163,6 +163,7 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
         threshold: 2.8,
         band: 0.1,
         range_exponent: 2.0,
+        incidence_correction: false,
         weak_is_reflection: true,
     });
     assert_eq!(
