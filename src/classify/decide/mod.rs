@@ -451,18 +451,14 @@ pub fn decide_with_hits(
         // a reflection off glass is far weaker than a transmitted echo, which
         // tells floors and ceilings behind glass (their own mirror images)
         // from their reflections.
-        if let Some(reflected) = bp
-            .echo_split
-            .filter(|_| single_pane)
-            .and_then(|split| {
-                let cos = if split.incidence_correction {
-                    scan.incidence_cos(frame, i).unwrap_or(1.0)
-                } else {
-                    1.0
-                };
-                split.reflected(frame.points[i].intensity, p.coords.norm(), cos)
-            })
-        {
+        if let Some(reflected) = bp.echo_split.filter(|_| single_pane).and_then(|split| {
+            let cos = if split.incidence_correction {
+                scan.incidence_cos(frame, i).unwrap_or(1.0)
+            } else {
+                1.0
+            };
+            split.reflected(frame.points[i].intensity, p.coords.norm(), cos)
+        }) {
             classes[i] = if reflected {
                 Class::Reflection
             } else {
