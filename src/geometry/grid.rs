@@ -338,4 +338,32 @@ mod tests {
                 .is_none()
         );
     }
+
+    /// Beams pass a plane along 4 m, but surface echoes come from its first
+    /// metre only: with an echo reach of 1 m the far end is open space, not
+    /// glass; without it, all of it is transparent.
+    #[test]
+    fn transparent_cells_far_from_every_echo_are_open() {
+        let grid = |reach: f64| {
+            let mut g =
+                EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(4.0, 1.0), 0.2, 1, 1000)
+                    .unwrap();
+            g.echo_reach = reach;
+            for k in 0..g.cols * g.rows {
+                let c = g.centre(k);
+                g.vote(&c, 3, 0);
+                if c.x < 1.0 {
+                    g.vote_echo(&c);
+                }
+            }
+            g.finalize();
+            g
+        };
+        let with = grid(1.0);
+        assert_eq!(with.state(&Point2::new(0.5, 0.5)), Surface::Transparent);
+        assert_eq!(with.state(&Point2::new(1.7, 0.5)), Surface::Transparent);
+        assert_eq!(with.state(&Point2::new(3.5, 0.5)), Surface::Open);
+        let without = grid(0.0);
+        assert_eq!(without.state(&Point2::new(3.5, 0.5)), Surface::Transparent);
+    }
 }

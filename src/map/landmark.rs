@@ -232,6 +232,47 @@ mod tests {
     use crate::io::PlaneKind;
     use nalgebra::Vector3;
 
+    /// A landmark detected in 3 of the 100 frames that had it in view is a
+    /// chance fit (found ratio 0.03); frames behind it or far away do not
+    /// count as having it in view.
+    #[test]
+    fn landmarks_found_in_too_few_of_the_frames_that_see_them_are_not_used() {
+        use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let obs = PlaneObservation {
+            kind: PlaneKind::Reflective,
+            plane,
+            boundary: vec![
+                Point3::new(5.0, -1.0, 0.0),
+                Point3::new(5.0, 1.0, 0.0),
+                Point3::new(5.0, 1.0, 2.0),
+                Point3::new(5.0, -1.0, 2.0),
+            ],
+            frame: 0,
+        };
+        let mut map = PlaneMap::new();
+        map.landmarks.push(Landmark::new(0, &obs));
+        map.landmarks[0].observations = 3;
+        let at = |x: f64, y: f64| {
+            Isometry3::from_parts(Translation3::new(x, y, 1.0), UnitQuaternion::identity())
+        };
+        // 100 poses in front of it, 50 behind it, 50 far away.
+        let mut poses: Vec<_> = (0..100).map(|k| at(k as f64 * 0.04, 0.0)).collect();
+        poses.extend((0..50).map(|k| at(6.0 + k as f64 * 0.04, 0.0)));
+        poses.extend((0..50).map(|_| at(0.0, 40.0)));
+        assert_eq!(map.landmarks[0].frames_in_view(&poses, 10.0), 100);
+        assert!((map.landmarks[0].found_ratio(&poses, 10.0) - 0.03).abs() < 1e-12);
+        let selection = |min_found_ratio| LandmarkSelection {
+            min_observations: 3,
+            min_found_ratio,
+            visibility_range: 10.0,
+        };
+        assert!(map.reliable(&poses, &selection(0.05)).is_empty());
+        assert_eq!(map.reliable(&poses, &selection(0.0)), vec![0]);
+        map.landmarks[0].observations = 20;
+        assert_eq!(map.reliable(&poses, &selection(0.05)), vec![0]);
+    }
+
     #[test]
     fn pruning_drops_rare_landmarks_once_old_enough_and_ids_stay_unique() {
         let obs = |frame: usize| PlaneObservation {
