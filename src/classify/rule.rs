@@ -52,10 +52,13 @@ pub enum Rule {
     ObliqueEcho = 13,
     /// Behind a landmark that transmits nothing (a mirror): Reflection.
     BehindMirror = 14,
+    /// Measured on a surface seen directly from elsewhere in the sequence:
+    /// real, an Obstacle.
+    SeenSurface = 15,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 15] = [
+pub const RULES: [Rule; 16] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -71,6 +74,7 @@ pub const RULES: [Rule; 15] = [
     Rule::DualReturn,
     Rule::ObliqueEcho,
     Rule::BehindMirror,
+    Rule::SeenSurface,
 ];
 
 impl Rule {
@@ -97,6 +101,7 @@ impl Rule {
             Rule::DualReturn => "dual-return",
             Rule::ObliqueEcho => "oblique-echo",
             Rule::BehindMirror => "behind-mirror",
+            Rule::SeenSurface => "seen-surface",
         }
     }
 }

@@ -28,6 +28,8 @@
 //!    - echo strength: where the landmark's echoes behind it fall in two
 //!      groups, the weak one reflected and the strong one transmitted (or
 //!      the other way round, as its anchors say);
+//!    - seen surface: a point measured on a surface seen directly from
+//!      elsewhere in the sequence is real (an Obstacle);
 //!    - support: if the mirrored point lands on an observed surface (a return
 //!      at that range in its beam, or a Normal point within a radius) it is a
 //!      Reflection;
@@ -45,7 +47,7 @@ mod hypotheses;
 use self::hypotheses::{two_hypotheses, Verdict};
 use super::boundary::{beam_crossing, BeamPlanes};
 use super::rule::{Decisions, Rule};
-use super::space::SensorFrameSpace;
+use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
 use crate::reflect::BoundedPlane;
@@ -117,6 +119,10 @@ pub struct DecisionParams {
     /// surface lies within this share of its range (at least a voxel): the
     /// plane's error moves mirrored positions in proportion.
     pub space_clearance_ratio: f64,
+    /// A behind-plane point that lies on a surface seen directly over the
+    /// sequence (an occupied voxel of the space map) is real: an Obstacle.
+    /// Tested after the echo strength, before the mirror-image support.
+    pub seen_surface_test: bool,
 }
 
 impl Default for DecisionParams {
@@ -141,6 +147,7 @@ impl Default for DecisionParams {
             space_test: false,
             space_margin: 0.2,
             space_clearance_ratio: 0.0,
+            seen_surface_test: false,
         }
     }
 }
@@ -465,6 +472,16 @@ pub fn decide_with_hits(
                 Class::Obstacle
             };
             rules[i] = Rule::EchoStrength;
+            continue;
+        }
+        // Where it was measured, a surface was seen directly from elsewhere:
+        // it is real (a mirror image lands near some observed surface far
+        // more often than exactly on one, so this outranks support).
+        if params.seen_surface_test
+            && single_pane
+            && space.is_some_and(|s| s.occupancy(&p) == Occupancy::Occupied)
+        {
+            (classes[i], rules[i]) = (Class::Obstacle, Rule::SeenSurface);
             continue;
         }
         if params.support_test {

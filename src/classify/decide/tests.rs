@@ -210,6 +210,47 @@ fn an_oblique_single_echo_on_the_pane_is_a_mullion() {
     assert_eq!(classify(&normal, 50.0, &wide, &on), [Class::Glass]);
 }
 
+/// A point measured on a surface seen directly from elsewhere (a wall
+/// behind the pane, seen from beyond it) is real with the rule on, and
+/// undecided without it.
+#[test]
+fn a_point_on_a_surface_seen_directly_is_real() {
+    let planes = pane();
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    let f = frame(&[[8.0, 0.2, 0.3]], 50.0);
+    let scan = OrganizedScan::build(&f, &sensor).unwrap();
+    let hits = BeamHits::compute(&f, &scan, &BeamPlanes::hulls(&planes, 0.0), 0.1);
+    // A wall at x = 8 seen from a pose beyond the pane.
+    let mut space = SpaceMap::new(0.1, 2, 1);
+    for j in -10..=10 {
+        for k in -10..=10 {
+            let end = Point3::new(8.0, j as f64 * 0.05, k as f64 * 0.05);
+            space.add_beam(&Point3::new(7.0, 0.0, 0.0), &end, 0.2, true);
+        }
+    }
+    let view = space.in_sensor_frame(Isometry3::identity());
+    let run = |seen_surface_test| {
+        let params = DecisionParams {
+            seen_surface_test,
+            ..rule_only(false)
+        };
+        decide_with_hits(
+            &f,
+            &scan,
+            &sensor,
+            &planes,
+            &hits,
+            &params,
+            None,
+            Some(&view),
+        )
+    };
+    let with = run(true);
+    assert_eq!(with.classes, [Class::Obstacle]);
+    assert_eq!(with.rules, [Rule::SeenSurface]);
+    assert_eq!(run(false).classes, [Class::Unclassified]);
+}
+
 /// Behind a mirror landmark every point is a Reflection, whatever the
 /// space says (a box behind it that the space calls real).
 #[test]
