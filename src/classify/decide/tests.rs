@@ -64,20 +64,44 @@ fn rule_only(space_test: bool) -> DecisionParams {
     }
 }
 
+/// The decisions for `points` (single returns, sensor at the origin)
+/// against `planes`, with `space` as the space seen directly.
+fn decide_in(
+    points: &[[f32; 3]],
+    intensity: f32,
+    planes: &[BoundedPlane],
+    params: &DecisionParams,
+    space: &SpaceMap,
+) -> Decisions {
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    let f = frame(points, intensity);
+    let scan = OrganizedScan::build(&f, &sensor).unwrap();
+    let beams = BeamPlanes::hulls(planes, 0.0);
+    let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
+    let view = space.in_sensor_frame(Isometry3::identity());
+    decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view))
+}
+
+/// The classes of `points` with the room in front of the pane seen.
 fn classify(
     points: &[[f32; 3]],
     intensity: f32,
     planes: &[BoundedPlane],
     params: &DecisionParams,
 ) -> Vec<Class> {
-    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
-    let f = frame(points, intensity);
-    let scan = OrganizedScan::build(&f, &sensor).unwrap();
-    let beams = BeamPlanes::hulls(planes, 0.0);
-    let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
-    let space = room_space();
-    let view = space.in_sensor_frame(Isometry3::identity());
-    decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view)).classes
+    decide_in(points, intensity, planes, params, &room_space()).classes
+}
+
+/// A wall at `x` (a 2 x 2 m patch around y = z = 0) seen from `origin`.
+fn wall_seen_from(origin: Point3<f64>, x: f64) -> SpaceMap {
+    let mut space = SpaceMap::new(0.1, 2, 1);
+    for j in -10..=10 {
+        for k in -10..=10 {
+            let end = Point3::new(x, j as f64 * 0.1, k as f64 * 0.1);
+            space.add_beam(&origin, &end, 0.2, true);
+        }
+    }
+    space
 }
 
 /// Pitfall 1 of the brief: a box 0.5 m behind the pane, closer than the
@@ -106,43 +130,13 @@ fn an_obstacle_close_behind_glass_is_told_by_the_free_space_in_front() {
 #[test]
 fn a_point_in_space_seen_free_is_a_reflection() {
     let planes = pane();
-    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
-    let f = frame(&[[8.0, 0.2, 0.3]], 50.0);
-    let scan = OrganizedScan::build(&f, &sensor).unwrap();
-    let params = rule_only(true);
-    let hits = BeamHits::compute(&f, &scan, &BeamPlanes::hulls(&planes, 0.0), 0.1);
-    // Space beyond the pane seen from a pose out there; the mirror image
-    // of the point (x = 2) lies in the room, never seen.
-    let mut space = SpaceMap::new(0.1, 2, 1);
-    for j in -10..=10 {
-        for k in -10..=10 {
-            let end = Point3::new(12.0, j as f64 * 0.1, k as f64 * 0.1);
-            space.add_beam(&Point3::new(6.0, 0.0, 0.0), &end, 0.2, true);
-        }
-    }
-    let view = space.in_sensor_frame(Isometry3::identity());
-    let with = decide_with_hits(
-        &f,
-        &scan,
-        &sensor,
-        &planes,
-        &hits,
-        &params,
-        None,
-        Some(&view),
-    );
+    // Space beyond the pane seen from a pose out there; the mirror image of
+    // the point (x = 2) lies in the room, never seen.
+    let space = wall_seen_from(Point3::new(6.0, 0.0, 0.0), 12.0);
+    let with = decide_in(&[[8.0, 0.2, 0.3]], 50.0, &planes, &rule_only(true), &space);
     assert_eq!(with.classes, [Class::Reflection]);
     assert_eq!(with.rules, [Rule::RealRefuted]);
-    let without = decide_with_hits(
-        &f,
-        &scan,
-        &sensor,
-        &planes,
-        &hits,
-        &rule_only(false),
-        None,
-        Some(&view),
-    );
+    let without = decide_in(&[[8.0, 0.2, 0.3]], 50.0, &planes, &rule_only(false), &space);
     assert_eq!(without.classes, [Class::Unclassified]);
     assert_eq!(without.rules, [Rule::Undecided]);
 }
@@ -216,34 +210,14 @@ fn an_oblique_single_echo_on_the_pane_is_a_mullion() {
 #[test]
 fn a_point_on_a_surface_seen_directly_is_real() {
     let planes = pane();
-    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
-    let f = frame(&[[8.0, 0.2, 0.3]], 50.0);
-    let scan = OrganizedScan::build(&f, &sensor).unwrap();
-    let hits = BeamHits::compute(&f, &scan, &BeamPlanes::hulls(&planes, 0.0), 0.1);
     // A wall at x = 8 seen from a pose beyond the pane.
-    let mut space = SpaceMap::new(0.1, 2, 1);
-    for j in -10..=10 {
-        for k in -10..=10 {
-            let end = Point3::new(8.0, j as f64 * 0.05, k as f64 * 0.05);
-            space.add_beam(&Point3::new(7.0, 0.0, 0.0), &end, 0.2, true);
-        }
-    }
-    let view = space.in_sensor_frame(Isometry3::identity());
+    let space = wall_seen_from(Point3::new(7.0, 0.0, 0.0), 8.0);
     let run = |seen_surface_test| {
         let params = DecisionParams {
             seen_surface_test,
             ..rule_only(false)
         };
-        decide_with_hits(
-            &f,
-            &scan,
-            &sensor,
-            &planes,
-            &hits,
-            &params,
-            None,
-            Some(&view),
-        )
+        decide_in(&[[8.0, 0.1, 0.1]], 50.0, &planes, &params, &space)
     };
     let with = run(true);
     assert_eq!(with.classes, [Class::Obstacle]);
