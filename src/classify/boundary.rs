@@ -190,6 +190,21 @@ impl<'a> BeamPlanes<'a> {
 }
 
 impl BeamPlanes<'_> {
+    /// Whether the beam towards `p`, which crosses plane `first` at range
+    /// `t`, meets another pane between `glass` beyond that crossing and
+    /// `behind` before `p`: past a second pane the first one's mirror says
+    /// nothing about the point.
+    pub fn second_pane(
+        &self,
+        p: &Point3<f64>,
+        first: usize,
+        t: f64,
+        glass: f64,
+        behind: f64,
+    ) -> bool {
+        self.crosses_between(p, first, t + glass, p.coords.norm() - behind)
+    }
+
     /// Whether the beam towards `p` crosses a plane other than `skip` inside
     /// its boundary at a range strictly between `lo` and `hi`: a beam that
     /// passed one pane and met a second before its return (glass behind

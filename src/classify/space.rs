@@ -134,13 +134,14 @@ impl SpaceMap {
         ]
     }
 
-    fn brick_mut(&mut self, key: u64) -> &mut Brick {
+    /// The number of the brick with `key`, allocated on first use.
+    fn brick_index(&mut self, key: u64) -> u32 {
         let next = self.bricks.len() as u32;
         let b = *self.index.entry(key).or_insert(next);
         if b == next {
             self.bricks.push(Brick::new());
         }
-        &mut self.bricks[b as usize]
+        b
     }
 
     #[inline]
@@ -175,11 +176,7 @@ impl SpaceMap {
             walk(self.voxel, origin, &(delta / len), len - stop_short, |v| {
                 let (key, local) = split(v);
                 if key != cache_key {
-                    let next = self.bricks.len() as u32;
-                    cache = *self.index.entry(key).or_insert(next);
-                    if cache == next {
-                        self.bricks.push(Brick::new());
-                    }
+                    cache = self.brick_index(key);
                     cache_key = key;
                 }
                 let c = &mut self.bricks[cache as usize].passes[local];
@@ -190,7 +187,8 @@ impl SpaceMap {
         if hit {
             let (key, local) = split(self.voxel_of(end));
             let block_hits = self.block_hits;
-            let brick = self.brick_mut(key);
+            let b = self.brick_index(key) as usize;
+            let brick = &mut self.bricks[b];
             if brick.hits[local] == 0 {
                 brick.hit_voxels += 1;
             }

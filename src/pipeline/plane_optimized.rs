@@ -389,7 +389,7 @@ fn fit_echo_splits<'a>(
                 // Only beams behind one pane: past a second one the mirror
                 // of the first says nothing.
                 if range - h.range <= behind
-                    || beams.crosses_between(&pos, h.plane, h.range + glass, range - behind)
+                    || beams.second_pane(&pos, h.plane, h.range, glass, behind)
                 {
                     continue;
                 }

@@ -386,16 +386,14 @@ pub fn decide_with_hits(
         let p = frame.points[i].position();
         // Past a second pane the first one's mirror says nothing: such beams
         // are left to the frame's own tests.
-        let single_pane = {
-            let r = p.coords.norm();
-            let t = beam_crossing(&bp.plane, &p).unwrap_or(r);
-            !one_sided.crosses_between(
-                &p,
-                plane as usize,
-                t + params.glass_distance,
-                r - params.behind_distance,
-            )
-        };
+        let t = beam_crossing(&bp.plane, &p).unwrap_or(p.coords.norm());
+        let single_pane = !one_sided.second_pane(
+            &p,
+            plane as usize,
+            t,
+            params.glass_distance,
+            params.behind_distance,
+        );
         // Behind a mirror nothing is real.
         if bp.mirror && single_pane {
             (classes[i], rules[i]) = (Class::Reflection, Rule::BehindMirror);
