@@ -23,7 +23,7 @@ fn run(boundary: BoundaryMode) -> (Sequence, specular::pipeline::PlaneOptimizedO
 fn strip_points(seq: &Sequence) -> Vec<(usize, usize)> {
     let poses = seq.poses.as_ref().unwrap();
     let mut out = Vec::new();
-    for (k, f) in seq.frames.iter().enumerate() {
+    for (k, f) in seq.in_memory().unwrap().iter().enumerate() {
         for (i, p) in f.points.iter().enumerate() {
             let w = poses[k] * p.position();
             if (w.y - 5.0).abs() < 0.05

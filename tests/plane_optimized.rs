@@ -31,7 +31,7 @@ fn default_config_beats_the_original_on_the_ten_shared_frames() {
     };
     let seq = load(&dir, &dir.join("hesai_pose.txt"));
     let out = run_plane_optimized(&seq, &config("default")).unwrap();
-    let m = out.run.confusion(&seq).unwrap().metrics();
+    let m = out.run.confusion.unwrap().metrics();
     let t = m.table();
     assert!(m.accuracy > 95.0, "{t}");
     assert!(m.reflection_removal > 90.1, "{t}");
@@ -202,7 +202,7 @@ fn reflections_of_a_box_are_mirrored_back_onto_the_box() {
     let out = run_plane_optimized(&seq, &c).unwrap();
     assert_eq!(out.used.len(), 1, "one mirror landmark");
     let classes = &out.run.frames[0].classes;
-    let m = out.run.confusion(&seq).unwrap().metrics();
+    let m = out.run.confusion.unwrap().metrics();
     assert!(m.class(Class::Reflection).recall > 90.0, "{}", m.table());
     assert!(m.class(Class::Glass).precision > 99.0, "{}", m.table());
     assert!(m.class(Class::Normal).recall > 99.0, "{}", m.table());
@@ -212,7 +212,7 @@ fn reflections_of_a_box_are_mirrored_back_onto_the_box() {
         .iter()
         .map(|&i| out.map.landmarks[i].bounded())
         .collect();
-    let mirrored = mirror_reflections(&seq.frames[0], classes, &planes, 0.0);
+    let mirrored = mirror_reflections(&seq.frame(0).unwrap(), classes, &planes, 0.0);
     assert!(mirrored.len() * 10 > reflections * 9);
     for (i, q) in mirrored {
         assert!(

@@ -25,7 +25,7 @@ fn detects_the_office_window_in_every_sample_frame() {
     let config = single_scan_config();
     let sensor = SensorModel::resolve(&config.sensor).unwrap();
     let detector = registry::detector(&config, &sensor);
-    for frame in &seq.frames {
+    for frame in seq.in_memory().unwrap() {
         let scan = OrganizedScan::build(frame, &sensor).unwrap();
         let det = detector.detect(frame, &scan, 7);
         let window = &det.planes.first().expect("a reflective plane").bounded;
@@ -61,7 +61,7 @@ fn sample_classification_is_deterministic_and_sensible() {
     for (x, y) in a.frames.iter().zip(&b.frames) {
         assert_eq!(x.classes, y.classes, "frame {}", x.name);
     }
-    let m = a.confusion(&seq).unwrap().metrics();
+    let m = a.confusion.unwrap().metrics();
     assert!(m.accuracy > 90.0, "{}", m.table());
     assert!(m.reflection_removal > 80.0, "{}", m.table());
     assert!(m.class(Class::Normal).iou > 95.0, "{}", m.table());
@@ -77,7 +77,7 @@ fn single_scan_at_least_matches_the_original_on_the_ten_shared_frames() {
     let seq = load(&dir, Some(&dir.join("hesai_pose.txt")));
     assert_eq!(seq.len(), 10);
     let out = run_single_scan(&seq, &single_scan_config()).unwrap();
-    let m = out.confusion(&seq).unwrap().metrics();
+    let m = out.confusion.unwrap().metrics();
     let t = m.table();
     assert!(m.accuracy >= 91.0, "{t}");
     assert!(m.reflection_removal >= 81.0, "{t}");
@@ -114,7 +114,7 @@ fn a_frame_without_a_reflective_plane_is_all_normal() {
     let dir = common::sample_dir();
     let seq = load(&dir.join("frames"), None);
     // Keep only a handful of second returns: too few candidates for a plane.
-    let mut frame = seq.frames[0].clone();
+    let mut frame = seq.frame(0).unwrap().into_owned();
     let mut kept = 0;
     frame.points.retain(|p| {
         if p.ret == 2 {
@@ -141,7 +141,7 @@ fn a_frame_without_a_reflective_plane_is_all_normal() {
 fn a_frame_without_second_returns_is_a_clear_error() {
     let dir = common::sample_dir();
     let seq = load(&dir.join("frames"), None);
-    let mut frame = seq.frames[0].clone();
+    let mut frame = seq.frame(0).unwrap().into_owned();
     frame.points.retain(|p| p.ret == 1);
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join(format!("{}.ply", frame.name));

@@ -23,7 +23,7 @@ pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
 pub use rule::{Decisions, Rule, RuleTally};
 pub use single_scan::SingleScanClassifier;
 pub use space::{Occupancy, SpaceMap};
-pub use support::WorldSupport;
+pub use support::{SupportBuilder, WorldSupport};
 
 use serde::{Deserialize, Serialize};
 

@@ -45,23 +45,44 @@ fn bucket_key(c: [i64; 3]) -> u64 {
     (c[0] as u64 & m) | ((c[1] as u64 & m) << 21) | ((c[2] as u64 & m) << 42)
 }
 
-impl WorldSupport {
-    /// Build from world-frame points, keeping the first point of each
-    /// `voxel`-sized cube (deterministic for a given input order), for
-    /// queries of radius up to `radius`.
-    pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64, radius: f64) -> Self {
+/// Builds a [`WorldSupport`] from points offered a frame at a time: what it
+/// keeps grows with the surface seen (one point per voxel), not with the
+/// number of frames.
+pub struct SupportBuilder {
+    radius: f64,
+    inv: f64,
+    seen: VoxelSet,
+    buckets: FxHashMap<u64, u32>,
+    /// The kept points with their bucket numbers.
+    kept: Vec<(u32, [f32; 3])>,
+    /// Points per bucket.
+    counts: Vec<u32>,
+    /// Consecutive points mostly share a bucket: the last one.
+    last: Option<(u64, u32)>,
+}
+
+impl SupportBuilder {
+    /// An empty support thinned to one point per `voxel`, for queries of
+    /// radius up to `radius`.
+    pub fn new(voxel: f64, radius: f64) -> Self {
         let radius = radius.max(voxel).max(1e-3);
-        let inv = 1.0 / radius;
-        let mut seen = VoxelSet::new(voxel);
-        let mut buckets = FxHashMap::default();
-        // Pass 1: the kept points with their bucket numbers, and the counts.
-        let mut kept: Vec<(u32, [f32; 3])> = Vec::new();
-        let mut counts: Vec<u32> = Vec::new();
-        // Consecutive points mostly share a bucket: remember the last one.
-        let mut last: Option<(u64, u32)> = None;
+        Self {
+            radius,
+            inv: 1.0 / radius,
+            seen: VoxelSet::new(voxel),
+            buckets: FxHashMap::default(),
+            kept: Vec::new(),
+            counts: Vec::new(),
+            last: None,
+        }
+    }
+
+    /// Offer world-frame points (the first of each voxel is kept).
+    pub fn extend(&mut self, points: impl IntoIterator<Item = Point3<f64>>) {
+        let inv = self.inv;
         for p in points {
             let xyz = [p.x, p.y, p.z];
-            if !seen.insert(xyz, 0) {
+            if !self.seen.insert(xyz, 0) {
                 continue;
             }
             let key = bucket_key([
@@ -69,42 +90,57 @@ impl WorldSupport {
                 floor_i64(p.y * inv),
                 floor_i64(p.z * inv),
             ]);
-            let b = match last {
+            let b = match self.last {
                 Some((k, b)) if k == key => b,
                 _ => {
-                    let next = counts.len() as u32;
-                    let b = *buckets.entry(key).or_insert(next);
+                    let next = self.counts.len() as u32;
+                    let b = *self.buckets.entry(key).or_insert(next);
                     if b == next {
-                        counts.push(0);
+                        self.counts.push(0);
                     }
-                    last = Some((key, b));
+                    self.last = Some((key, b));
                     b
                 }
             };
-            counts[b as usize] += 1;
-            kept.push((b, [p.x as f32, p.y as f32, p.z as f32]));
+            self.counts[b as usize] += 1;
+            self.kept.push((b, [p.x as f32, p.y as f32, p.z as f32]));
         }
-        // Pass 2: counting sort into one array, input order kept per bucket.
-        let mut starts = Vec::with_capacity(counts.len() + 1);
+    }
+
+    /// The support: a counting sort of the kept points into one array,
+    /// input order kept per bucket.
+    pub fn finish(self) -> WorldSupport {
+        let mut starts = Vec::with_capacity(self.counts.len() + 1);
         let mut total = 0u32;
         starts.push(0);
-        for &c in &counts {
+        for &c in &self.counts {
             total += c;
             starts.push(total);
         }
-        let mut fill: Vec<u32> = starts[..counts.len()].to_vec();
-        let mut flat = vec![[0f32; 3]; kept.len()];
-        for (b, q) in kept {
+        let mut fill: Vec<u32> = starts[..self.counts.len()].to_vec();
+        let mut flat = vec![[0f32; 3]; self.kept.len()];
+        for (b, q) in self.kept {
             let slot = &mut fill[b as usize];
             flat[*slot as usize] = q;
             *slot += 1;
         }
-        Self {
-            radius,
-            buckets,
+        WorldSupport {
+            radius: self.radius,
+            buckets: self.buckets,
             starts,
             points: flat,
         }
+    }
+}
+
+impl WorldSupport {
+    /// Build from world-frame points, keeping the first point of each
+    /// `voxel`-sized cube (deterministic for a given input order), for
+    /// queries of radius up to `radius`.
+    pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64, radius: f64) -> Self {
+        let mut builder = SupportBuilder::new(voxel, radius);
+        builder.extend(points);
+        builder.finish()
     }
 
     /// Number of points kept.

@@ -17,8 +17,8 @@ use specular::config::Method;
 use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
-use super::detect::{detect, run_method, write_outputs};
-use super::visual::{write_index, write_visual, VisualOptions};
+use super::detect::{detect_into, open_frames, Detected};
+use super::visual::{write_index, VisualOptions};
 use super::{bundled_sample, load_config};
 
 /// Arguments of `demo`.
@@ -55,19 +55,16 @@ pub fn run(args: DemoArgs) -> Result<()> {
         &format!("simulated:{}", args.scene),
     )?;
     config.sensor = scene.sensor.model.name.clone();
-    let (output, map) =
-        run_method(&sequence, &config).context("plane-optimized on the simulated scene")?;
     let sim_out = args.out.join("sim");
-    let confusion = write_outputs(&sim_out, &config, &sequence, &output, map.as_ref())?;
     let sim_title = format!("specular demo: simulated scene '{}'", args.scene);
-    write_visual(
+    let Detected { run, map } = detect_into(
         &sim_out,
-        &config,
         &sequence,
-        &output,
-        map.as_ref(),
-        &visual(&args, sim_title.clone()),
-    )?;
+        &config,
+        Some(&visual(&args, sim_title.clone())),
+    )
+    .context("plane-optimized on the simulated scene")?;
+    let confusion = run.confusion;
     println!(
         "specular demo 1/2: simulated scene '{}' ({} frames, simulated in {:.1} s), plane-optimized with true poses",
         args.scene,
@@ -86,23 +83,21 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let mut config = load_config(&args.config)?;
     config.method = Method::PlaneOptimized;
     let sample = bundled_sample();
-    let (sequence, output, map) = detect(
+    let real_out = args.out.join("real");
+    let real_title = "specular demo: bundled 3DRef sample".to_string();
+    let sequence = open_frames(
         &sample.join("frames"),
         Some(&sample.join("poses.txt")),
         &config,
+    )?;
+    let Detected { run, .. } = detect_into(
+        &real_out,
+        &sequence,
+        &config,
+        Some(&visual(&args, real_title.clone())),
     )
     .with_context(|| format!("running the demo on {}", sample.display()))?;
-    let real_out = args.out.join("real");
-    let confusion = write_outputs(&real_out, &config, &sequence, &output, map.as_ref())?;
-    let real_title = "specular demo: bundled 3DRef sample".to_string();
-    write_visual(
-        &real_out,
-        &config,
-        &sequence,
-        &output,
-        map.as_ref(),
-        &visual(&args, real_title.clone()),
-    )?;
+    let confusion = run.confusion;
     println!(
         "\nspecular demo 2/2: {} real 3DRef frames ({}), plane-optimized",
         sequence.len(),

@@ -2,25 +2,24 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Args;
-use specular::classify::Class;
 use specular::config::{Config, Method};
-use specular::eval::Confusion;
 use specular::io;
-use specular::pipeline::plane_optimized::around_corner_map;
 use specular::pipeline::{
-    run_plane_optimized, run_single_scan, PlaneOptimizedOutput, RunOutput, Sequence, StageTimings,
+    run_plane_optimized_into, run_single_scan_into, PlaneOptimizedOutput, RunOutput, Sequence,
 };
-use specular::reflect::BoundedPlane;
 
+use super::output::{write_summaries, OutputOptions, RunWriter};
 use super::visual::{write_visual, VisualOptions};
 use super::{load_config, MethodArg};
 
 /// Arguments of `detect`.
 #[derive(Args, Debug)]
 pub struct DetectArgs {
-    /// Directory of 3DRef frames (`<timestamp>.ply`).
+    /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
+    /// sequence directory (`raw/seqN`, frames in `raycast/hesai/`, poses
+    /// from `hesai_pose.txt` unless `--poses` is given).
     #[arg(long, required_unless_present = "bag")]
     pub frames: Option<PathBuf>,
     /// ROS 2 bag (`.mcap`) of `sensor_msgs/msg/PointCloud2` frames, instead
@@ -60,39 +59,38 @@ pub fn run(args: DetectArgs) -> Result<()> {
     if let Some(m) = args.method {
         config.method = m.into();
     }
-    let (input, (sequence, mut output, map)) = match (&args.frames, &args.bag) {
-        (Some(frames), _) => (frames, detect(frames, args.poses.as_deref(), &config)?),
+    let wall = std::time::Instant::now();
+    let (input, sequence) = match (&args.frames, &args.bag) {
+        (Some(frames), _) => {
+            // The 3DRef release layout brings its pose file.
+            let poses = args.poses.clone().or_else(|| io::release_poses(frames));
+            if args.poses.is_none() {
+                if let Some(p) = &poses {
+                    println!("poses: {} (3DRef release layout)", p.display());
+                }
+            }
+            (frames, open_frames(frames, poses.as_deref(), &config)?)
+        }
         (None, Some(bag)) => {
             let topic = args.topic.as_deref().unwrap_or_default();
-            (bag, detect_bag(bag, topic, args.poses.as_deref(), &config)?)
+            (bag, open_bag(bag, topic, args.poses.as_deref(), &config)?)
         }
         (None, None) => bail!("give --frames DIR or --bag FILE --topic NAME"),
     };
-    let start = std::time::Instant::now();
-    let confusion = write_outputs(&args.out, &config, &sequence, &output, map.as_ref())?;
-    if !args.lean {
-        let visual = VisualOptions {
-            mcap: !args.no_mcap,
-            title: format!("specular detect: {}", input.display()),
-        };
-        write_visual(
-            &args.out,
-            &config,
-            &sequence,
-            &output,
-            map.as_ref(),
-            &visual,
-        )?;
-    }
-    output.timings.add("write outputs", start.elapsed());
-    output.timings.wall += start.elapsed();
+    let visual = (!args.lean).then(|| VisualOptions {
+        mcap: !args.no_mcap,
+        title: format!("specular detect: {}", input.display()),
+    });
+    let result = detect_into(&args.out, &sequence, &config, visual.as_ref())?;
+    let mut timings = result.run.timings.clone();
+    timings.wall = wall.elapsed();
     println!(
         "{} frames, method {}: predictions in {}",
         sequence.len(),
         config.method.name(),
         args.out.join("predictions").display()
     );
-    if let Some(map) = &map {
+    if let Some(map) = &result.map {
         println!(
             "plane map: {} landmarks, {} used ({}); planes.json, around_corner.ply",
             map.map.landmarks.len(),
@@ -100,11 +98,11 @@ pub fn run(args: DetectArgs) -> Result<()> {
             config.map.selection()
         );
     }
-    if let Some(conf) = confusion {
+    if let Some(conf) = &result.run.confusion {
         print!("{}", conf.metrics().table());
     }
     if args.timings {
-        print!("{}", output.timings.table());
+        print!("{}", timings.table());
     }
     if !args.lean {
         println!("report: {}", args.out.join("report.md").display());
@@ -112,35 +110,27 @@ pub fn run(args: DetectArgs) -> Result<()> {
     Ok(())
 }
 
-/// Load a sequence and run the configured method on it; the plane-optimized
-/// method also returns its map.
-pub(crate) fn detect(
+/// The frames of a directory (read pass by pass, never all at once) with
+/// their poses when given; the plane-optimized method needs poses.
+pub(crate) fn open_frames(
     frames: &Path,
     poses: Option<&Path>,
     config: &Config,
-) -> Result<(Sequence, RunOutput, Option<PlaneOptimizedOutput>)> {
-    let mut timings = StageTimings::default();
-    let wall = std::time::Instant::now();
+) -> Result<Sequence> {
     if config.method == Method::PlaneOptimized && poses.is_none() {
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
-    let sequence = Sequence::load(frames, poses, config.input.pose_tolerance, &mut timings)?;
-    let (mut output, map) = run_method(&sequence, config)?;
-    timings.merge(&output.timings);
-    timings.frames = sequence.len();
-    timings.wall = wall.elapsed();
-    output.timings = timings;
-    Ok((sequence, output, map))
+    Ok(Sequence::open(frames, poses, config.input.pose_tolerance)?)
 }
 
-/// Like [`detect`], from the point clouds on `topic` of a ROS 2 bag.
-pub(crate) fn detect_bag(
+/// The point clouds on `topic` of a ROS 2 bag as a sequence, with their
+/// poses when given.
+pub(crate) fn open_bag(
     bag: &Path,
     topic: &str,
     poses: Option<&Path>,
     config: &Config,
-) -> Result<(Sequence, RunOutput, Option<PlaneOptimizedOutput>)> {
-    let wall = std::time::Instant::now();
+) -> Result<Sequence> {
     if config.method == Method::PlaneOptimized && poses.is_none() {
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
@@ -155,77 +145,55 @@ pub(crate) fn detect_bag(
             path,
         )?);
     }
-    let (mut output, map) = run_method(&sequence, config)?;
-    output.timings.wall = wall.elapsed();
-    Ok((sequence, output, map))
+    Ok(sequence)
 }
 
-/// Run the configured method on a loaded sequence.
-pub(crate) fn run_method(
+/// A finished `detect` run.
+pub(crate) struct Detected {
+    /// Scores and timings (no per-frame classes: they were written).
+    pub run: RunOutput,
+    /// The plane map, for the plane-optimized method.
+    pub map: Option<PlaneOptimizedOutput>,
+}
+
+/// Run the configured method over `sequence` and write every output into
+/// `out` as the frames are classified (the report and plots too, with
+/// `visual`). A run that fails leaves no output behind.
+pub(crate) fn detect_into(
+    out: &Path,
     sequence: &Sequence,
     config: &Config,
-) -> Result<(RunOutput, Option<PlaneOptimizedOutput>)> {
-    Ok(match config.method {
-        Method::SingleScan => (run_single_scan(sequence, config)?, None),
+    visual: Option<&VisualOptions>,
+) -> Result<Detected> {
+    let map_method = config.method == Method::PlaneOptimized;
+    let options = OutputOptions {
+        around_corner: map_method,
+        visual: visual.is_some() && sequence.poses.is_some(),
+        mcap: visual.is_some_and(|v| v.mcap),
+    };
+    let mut writer = RunWriter::new(out, config, options)?;
+    let (mut run, map) = match config.method {
+        Method::SingleScan => (run_single_scan_into(sequence, config, &mut writer)?, None),
         Method::PlaneOptimized => {
-            let out = run_plane_optimized(sequence, config)?;
+            let out = run_plane_optimized_into(sequence, config, &mut writer)?;
             (out.run.clone(), Some(out))
         }
-    })
-}
-
-/// Write predictions, metrics (when labelled), the configuration used and,
-/// with a plane map, `planes.json` and `around_corner.ply`. Returns the
-/// confusion counts when the frames are labelled.
-pub(crate) fn write_outputs(
-    out: &Path,
-    config: &Config,
-    sequence: &Sequence,
-    output: &RunOutput,
-    map: Option<&PlaneOptimizedOutput>,
-) -> Result<Option<Confusion>> {
-    let pred_dir = out.join("predictions");
-    for f in &output.frames {
-        let ids: Vec<u8> = f.classes.iter().map(|c| c.id()).collect();
-        io::write_labels(&pred_dir.join(format!("{}.label", f.name)), &ids)?;
+    };
+    let start = std::time::Instant::now();
+    let written = writer.finish()?;
+    let names = sequence.names();
+    write_summaries(out, config, &names, &run, map.as_ref(), &written)?;
+    if let Some(visual) = visual {
+        write_visual(
+            out,
+            config,
+            sequence.len(),
+            &run,
+            map.as_ref(),
+            &written,
+            visual,
+        )?;
     }
-    io::write_atomic(&out.join("config.toml"), |w| {
-        std::io::Write::write_all(w, config.to_toml().as_bytes())
-    })?;
-    if let Some(map) = map {
-        let names: Vec<String> = sequence.frames.iter().map(|f| f.name.clone()).collect();
-        let records: Vec<_> = map
-            .used
-            .iter()
-            .zip(&map.planes)
-            .map(|(&i, bp)| map.map.landmarks[i].record(bp, &names))
-            .collect();
-        io::write_planes(&out.join("planes.json"), &records)?;
-        let planes: &[BoundedPlane] = &map.planes;
-        let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
-        let points = around_corner_map(
-            sequence,
-            &classes,
-            planes,
-            config.plane_map.hull_margin,
-            config.output.map_voxel,
-        );
-        io::write_map_ply(&out.join("around_corner.ply"), &points)?;
-    }
-    let confusion = output.confusion(sequence);
-    if let Some(conf) = &confusion {
-        // The scores, and which rule decided how many points of each label.
-        let mut value = serde_json::to_value(conf.metrics()).context("serialising metrics")?;
-        if let Some(obj) = value.as_object_mut() {
-            obj.insert(
-                "rules".into(),
-                serde_json::to_value(output.rule_tally(sequence)).context("serialising rules")?,
-            );
-        }
-        let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;
-        io::write_atomic(&out.join("metrics.json"), |w| {
-            std::io::Write::write_all(w, json.as_bytes())
-        })?;
-    }
-    Ok(confusion)
+    run.timings.add("write outputs", start.elapsed());
+    Ok(Detected { run, map })
 }

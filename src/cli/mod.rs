@@ -6,6 +6,7 @@ mod demo;
 mod detect;
 mod eval;
 mod graph;
+mod output;
 mod reproduce;
 mod simulate;
 mod slam;

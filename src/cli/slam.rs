@@ -9,14 +9,17 @@ use serde_json::json;
 use specular::eval::trajectory_error;
 use specular::io::{self, StampedPose};
 use specular::pipeline::slam::classify_with_poses;
-use specular::pipeline::{run_plane_optimized, run_slam, Sequence, StageTimings};
+use specular::pipeline::{run_plane_optimized_into, run_slam, Discard, Sequence};
 
 use super::load_config;
+use super::output::{OutputOptions, RunWriter};
 
 /// Arguments of `slam`.
 #[derive(Args, Debug)]
 pub struct SlamArgs {
-    /// Directory of 3DRef frames (`<timestamp>.ply`).
+    /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
+    /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, true
+    /// poses from `hesai_pose.txt` unless `--gt-poses` is given).
     #[arg(long)]
     pub frames: PathBuf,
     /// Output directory (poses.txt, planes.json, frames.csv, predictions/,
@@ -52,12 +55,15 @@ pub fn run(args: SlamArgs) -> Result<()> {
     if let Some(name) = &args.backend {
         config.backend.name = name.parse()?;
     }
-    let mut load_timings = StageTimings::default();
-    let mut sequence = Sequence::load(
+    // The 3DRef release layout brings its pose file (the ground truth).
+    let gt_poses = args
+        .gt_poses
+        .clone()
+        .or_else(|| io::release_poses(&args.frames));
+    let mut sequence = Sequence::open(
         &args.frames,
-        args.gt_poses.as_deref(),
+        gt_poses.as_deref(),
         config.input.pose_tolerance,
-        &mut load_timings,
     )?;
     if sequence.is_empty() {
         anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
@@ -69,7 +75,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
 
     // Poses, map, per-frame report.
     let stamped: Vec<StampedPose> = sequence
-        .frames
+        .entries
         .iter()
         .zip(&slam.poses)
         .map(|(f, p)| StampedPose {
@@ -78,7 +84,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         })
         .collect();
     io::write_tum(&out.join("poses.txt"), &stamped)?;
-    let names: Vec<String> = sequence.frames.iter().map(|f| f.name.clone()).collect();
+    let names = sequence.names();
     let records: Vec<_> = slam
         .map
         .landmarks
@@ -142,22 +148,18 @@ pub fn run(args: SlamArgs) -> Result<()> {
 
     // Classification with the estimated poses (and, for comparison, with the
     // true ones).
-    let labelled = sequence.frames.iter().all(|f| f.has_labels);
     let mut classification = None;
     let mut reference = None;
     if !args.no_classify {
-        let estimated = classify_with_poses(&mut sequence, slam.poses.clone(), &config)?;
-        let pred_dir = out.join("predictions");
-        for f in &estimated.run.frames {
-            let ids: Vec<u8> = f.classes.iter().map(|c| c.id()).collect();
-            io::write_labels(&pred_dir.join(format!("{}.label", f.name)), &ids)?;
-        }
-        if labelled {
-            classification = estimated.run.confusion(&sequence).map(|c| c.metrics());
-            if truth.is_some() {
-                let with_truth = run_plane_optimized(&sequence, &config)?;
-                reference = with_truth.run.confusion(&sequence).map(|c| c.metrics());
-            }
+        // Predictions are written frame by frame as they are classified.
+        let mut writer = RunWriter::new(out, &config, OutputOptions::default())?;
+        let estimated =
+            classify_with_poses(&mut sequence, slam.poses.clone(), &config, &mut writer)?;
+        writer.finish()?;
+        classification = estimated.run.confusion.map(|c| c.metrics());
+        if classification.is_some() && truth.is_some() {
+            let with_truth = run_plane_optimized_into(&sequence, &config, &mut Discard)?;
+            reference = with_truth.run.confusion.map(|c| c.metrics());
         }
     }
     let metrics = json!({
@@ -225,7 +227,6 @@ pub fn run(args: SlamArgs) -> Result<()> {
     }
     if args.timings {
         let mut t = slam.timings.clone();
-        t.merge(&load_timings);
         t.frames = slam.reports.len();
         print!("{}", t.table());
     }

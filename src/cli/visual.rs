@@ -1,16 +1,16 @@
 //! The outputs for people: `map.ply`, `run.mcap`, the PNG plots and
-//! `report.md` (written after `write_outputs`).
+//! `report.md` (written when the run has finished).
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use specular::classify::{Class, Rule};
 use specular::config::Config;
 use specular::io;
-use specular::pipeline::plane_optimized::measured_map;
-use specular::pipeline::{PlaneOptimizedOutput, RunOutput, Sequence};
+use specular::pipeline::{PlaneOptimizedOutput, RunOutput};
 use specular::reflect::BoundedPlane;
-use specular::viz::{self, plots, report::Report, McapRun};
+use specular::viz::{plots, report::Report};
+
+use super::output::WrittenFrames;
 
 /// Which optional outputs to write.
 #[derive(Debug, Clone)]
@@ -21,14 +21,16 @@ pub(crate) struct VisualOptions {
     pub title: String,
 }
 
-/// Write the map, recording, plots and report into `out`; returns the
-/// files written (relative names with a description), the report last.
+/// Write the map, plots and report into `out` (the recording was written
+/// frame by frame, see [`RunWriter`](super::output::RunWriter)); returns
+/// the files written (relative names with a description), the report last.
 pub(crate) fn write_visual(
     out: &Path,
     config: &Config,
-    sequence: &Sequence,
-    output: &RunOutput,
+    frames: usize,
+    run: &RunOutput,
     map: Option<&PlaneOptimizedOutput>,
+    written: &WrittenFrames,
     options: &VisualOptions,
 ) -> Result<Vec<(String, String)>> {
     let mut files: Vec<(String, String)> = vec![
@@ -38,7 +40,7 @@ pub(crate) fn write_visual(
         ),
         ("config.toml".into(), "the configuration used".into()),
     ];
-    let metrics = output.confusion(sequence).map(|c| c.metrics());
+    let metrics = run.confusion.map(|c| c.metrics());
     if metrics.is_some() {
         files.push(("metrics.json".into(), "scores against the labels".into()));
     }
@@ -53,15 +55,11 @@ pub(crate) fn write_visual(
         ));
     }
     let planes: &[BoundedPlane] = map.map(|m| m.planes.as_slice()).unwrap_or(&[]);
-    let classes: Vec<Vec<Class>> = output.frames.iter().map(|f| f.classes.clone()).collect();
-    let rules: Vec<Vec<Rule>> = output.frames.iter().map(|f| f.rules.clone()).collect();
-    let rule_tally = output.rule_tally(sequence);
     let mut plot_list = Vec::new();
 
-    if let Some(poses) = &sequence.poses {
+    if let Some(points) = &written.measured {
         let _span = tracing::info_span!("visual outputs").entered();
-        let points = measured_map(sequence, &classes, config.output.map_voxel);
-        io::write_map_ply(&out.join("map.ply"), &points)?;
+        io::write_map_ply(&out.join("map.ply"), points)?;
         files.push((
             "map.ply".into(),
             format!(
@@ -71,17 +69,7 @@ pub(crate) fn write_visual(
         ));
         tracing::info!(points = points.len(), "map.ply written");
 
-        if options.mcap {
-            let summary = viz::write_run_mcap(
-                &out.join("run.mcap"),
-                &McapRun {
-                    sequence,
-                    classes: &classes,
-                    rules: &rules,
-                    planes,
-                    hull_margin: config.plane_map.hull_margin,
-                },
-            )?;
+        if let Some(summary) = &written.mcap {
             tracing::info!(?summary, "run.mcap written");
             files.push((
                 "run.mcap".into(),
@@ -89,13 +77,13 @@ pub(crate) fn write_visual(
             ));
         }
 
-        let trajectory: Vec<[f64; 2]> = poses
-            .iter()
-            .map(|p| [p.translation.vector.x, p.translation.vector.y])
-            .collect();
-        plots::topdown_png(&out.join("topdown.png"), &points, planes, &trajectory)?;
+        let trajectory = &written.trajectory;
+        plots::topdown_png(&out.join("topdown.png"), points, planes, trajectory)?;
         plot_list.push(("Top-down map".to_string(), "topdown.png".to_string()));
-        plots::trajectory_png(&out.join("trajectory.png"), &[("poses", trajectory)])?;
+        plots::trajectory_png(
+            &out.join("trajectory.png"),
+            &[("poses", trajectory.clone())],
+        )?;
         plot_list.push(("Trajectory".to_string(), "trajectory.png".to_string()));
     }
     if let Some(m) = &metrics {
@@ -107,11 +95,7 @@ pub(crate) fn write_visual(
     }
     files.push(("report.md".into(), "this report".into()));
 
-    let mut summary = vec![format!(
-        "{} frames, method {}",
-        sequence.len(),
-        config.method.name()
-    )];
+    let mut summary = vec![format!("{frames} frames, method {}", config.method.name())];
     if let Some(m) = map {
         summary.push(format!(
             "plane map: {} landmarks, {} used ({})",
@@ -125,7 +109,7 @@ pub(crate) fn write_visual(
         command_line: command_line(),
         config_toml: config.to_toml(),
         metrics: metrics.as_ref(),
-        rules: Some(&rule_tally),
+        rules: Some(&run.rules),
         summary,
         plots: plot_list,
         files: files.clone(),

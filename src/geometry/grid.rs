@@ -261,6 +261,18 @@ impl EvidenceGrid {
         }
     }
 
+    /// Add `n` surface-echo votes to cell `k` (an [`index`](Self::index)).
+    pub fn vote_echo_at(&mut self, k: usize, n: u32) {
+        self.transparent[k] += n;
+        self.echo[k] += n;
+    }
+
+    /// Add votes to cell `k` (an [`index`](Self::index)).
+    pub fn vote_at(&mut self, k: usize, transparent: u32, opaque: u32) {
+        self.transparent[k] += transparent;
+        self.opaque[k] += opaque;
+    }
+
     /// Add another grid's votes (same geometry).
     pub fn add(&mut self, other: &EvidenceGrid) {
         for (a, b) in self.transparent.iter_mut().zip(&other.transparent) {

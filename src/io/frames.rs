@@ -34,6 +34,25 @@ pub fn parse_stamp(path: &Path) -> Result<(String, f64)> {
     Ok((stem.to_string(), stamp))
 }
 
+/// The directory holding a sequence's frames: `dir` itself, or, for the
+/// 3DRef release layout (`raw/seqN/` with the frames in
+/// `raw/seqN/raycast/hesai/`), that subdirectory, read in place.
+pub fn frame_dir(dir: &Path) -> PathBuf {
+    let release = dir.join("raycast").join("hesai");
+    if release.is_dir() {
+        release
+    } else {
+        dir.to_path_buf()
+    }
+}
+
+/// The pose file of the 3DRef release layout (`raw/seqN/hesai_pose.txt`)
+/// when `dir` is such a sequence directory and the file exists.
+pub fn release_poses(dir: &Path) -> Option<PathBuf> {
+    let poses = dir.join("hesai_pose.txt");
+    (dir.join("raycast").join("hesai").is_dir() && poses.is_file()).then_some(poses)
+}
+
 /// All `*.ply` frames in `dir`, sorted by timestamp. Errors when the
 /// directory is unreadable, holds no frame, or a stem is not a timestamp.
 pub fn list_frames(dir: &Path) -> Result<Vec<FrameEntry>> {

@@ -15,7 +15,7 @@ pub mod ros2_bag;
 pub mod tum;
 
 pub use atomic::write_atomic;
-pub use frames::{list_frames, match_poses, parse_stamp, FrameEntry};
+pub use frames::{frame_dir, list_frames, match_poses, parse_stamp, release_poses, FrameEntry};
 pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};

@@ -16,6 +16,8 @@
 //! incidence are not used: glass peaks there like a wall. Votes are counted
 //! on a grid in the landmark's chart.
 
+use std::collections::BTreeMap;
+
 use nalgebra::{Isometry3, Point2, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -100,66 +102,145 @@ pub fn gather_evidence(
     frames: &[EvidenceFrame<'_>],
     params: &EvidenceParams,
 ) -> Option<EvidenceGrid> {
-    let vs = landmark.boundary.vertices();
-    let (mut lo, mut hi) = (
-        Point2::new(f64::INFINITY, f64::INFINITY),
-        Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
-    );
-    for v in vs {
-        lo = Point2::new(lo.x.min(v.x), lo.y.min(v.y));
-        hi = Point2::new(hi.x.max(v.x), hi.y.max(v.y));
+    let gatherer = EvidenceGatherer::new(landmark, params)?;
+    let votes: Vec<FrameVotes> = frames.par_iter().map(|f| gatherer.votes(f)).collect();
+    let mut total = gatherer.total();
+    for v in votes {
+        total.add(v);
     }
-    let m = params.margin;
-    let mut empty = EvidenceGrid::new(
-        Point2::new(lo.x - m, lo.y - m),
-        Point2::new(hi.x + m, hi.y + m),
-        params.cell,
-        params.min_votes,
-        params.max_cells,
-    )?;
-    empty.min_echo_fraction = params.min_echo_fraction;
-    empty.echo_reach = params.echo_reach;
-    let partial: Vec<(EvidenceGrid, Votes)> = frames
-        .par_iter()
-        .map(|f| {
-            let mut grid = empty.empty_like();
-            let votes = vote_frame(
-                &mut grid,
-                &landmark.transformed(&f.pose.inverse()),
-                f,
-                params,
-            );
-            (grid, votes)
+    Some(total.finish())
+}
+
+/// Gathers one landmark's evidence frame by frame, so a sequence is read
+/// once and never held: [`votes`](Self::votes) reads a frame (in parallel
+/// with others), [`EvidenceTotal::add`] sums the votes. What the total
+/// keeps grows with the grid and the distinct echo intensities (a few
+/// hundred for a sensor that reports whole numbers), not with the frames.
+#[derive(Debug, Clone)]
+pub struct EvidenceGatherer {
+    landmark: BoundedPlane,
+    empty: EvidenceGrid,
+    params: EvidenceParams,
+}
+
+/// One frame's votes for one landmark.
+#[derive(Debug)]
+pub struct FrameVotes {
+    grid: EvidenceGrid,
+    votes: Votes,
+}
+
+/// The votes of a landmark summed over the frames so far.
+#[derive(Debug, Clone)]
+pub struct EvidenceTotal {
+    grid: EvidenceGrid,
+    params: EvidenceParams,
+    /// Intensities of surface echoes with a return behind the plane.
+    glass_echoes: IntensityCounts,
+    /// Single echoes on the plane: count per (cell, intensity bits).
+    single_echoes: BTreeMap<(usize, u32), u32>,
+}
+
+impl EvidenceGatherer {
+    /// A gatherer for `landmark` (world frame); `None` when it has no
+    /// usable boundary extent.
+    pub fn new(landmark: &BoundedPlane, params: &EvidenceParams) -> Option<Self> {
+        let vs = landmark.boundary.vertices();
+        let (mut lo, mut hi) = (
+            Point2::new(f64::INFINITY, f64::INFINITY),
+            Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for v in vs {
+            lo = Point2::new(lo.x.min(v.x), lo.y.min(v.y));
+            hi = Point2::new(hi.x.max(v.x), hi.y.max(v.y));
+        }
+        let m = params.margin;
+        let mut empty = EvidenceGrid::new(
+            Point2::new(lo.x - m, lo.y - m),
+            Point2::new(hi.x + m, hi.y + m),
+            params.cell,
+            params.min_votes,
+            params.max_cells,
+        )?;
+        empty.min_echo_fraction = params.min_echo_fraction;
+        empty.echo_reach = params.echo_reach;
+        Some(Self {
+            landmark: landmark.clone(),
+            empty,
+            params: *params,
         })
-        .collect();
-    let mut total = empty;
-    let mut glass_echoes = Vec::new();
-    for (g, v) in &partial {
-        total.add(g);
-        glass_echoes.extend_from_slice(&v.glass_echo_intensity);
     }
-    // Single echoes on the plane: opaque when brighter than the landmark's
-    // glass echoes by the ratio, glass otherwise (all opaque when the
-    // landmark has no dual-return glass echo to compare with).
-    let glass_median = median(&mut glass_echoes);
-    total.glass_echo_intensity = glass_median.map(|m| m as f32);
-    let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);
-    total.opaque_intensity = threshold.map(|t| t as f32);
-    total.peak_cos = params.peak_angle_deg.to_radians().cos();
-    for (_, v) in &partial {
-        for &(uv, intensity) in &v.single_echoes {
-            match threshold {
-                Some(th) if (intensity as f64) <= th => {
-                    if params.weak_single_echo_votes {
-                        total.vote_echo(&uv)
-                    }
-                }
-                _ => total.vote(&uv, 0, 1),
+
+    /// One frame's votes.
+    pub fn votes(&self, f: &EvidenceFrame<'_>) -> FrameVotes {
+        let mut grid = self.empty.empty_like();
+        let votes = vote_frame(
+            &mut grid,
+            &self.landmark.transformed(&f.pose.inverse()),
+            f,
+            &self.params,
+        );
+        FrameVotes { grid, votes }
+    }
+
+    /// An empty total to add frames' votes to.
+    pub fn total(&self) -> EvidenceTotal {
+        EvidenceTotal {
+            grid: self.empty.clone(),
+            params: self.params,
+            glass_echoes: IntensityCounts::default(),
+            single_echoes: BTreeMap::new(),
+        }
+    }
+}
+
+impl EvidenceTotal {
+    /// Add one frame's votes (the order of frames does not matter).
+    pub fn add(&mut self, v: FrameVotes) {
+        self.grid.add(&v.grid);
+        for x in v.votes.glass_echo_intensity {
+            self.glass_echoes.add(x);
+        }
+        for (uv, intensity) in v.votes.single_echoes {
+            if let Some(k) = self.grid.index(&uv) {
+                *self
+                    .single_echoes
+                    .entry((k, intensity.to_bits()))
+                    .or_insert(0) += 1;
             }
         }
     }
-    total.finalize();
-    Some(total)
+
+    /// The landmark's evidence grid, decided.
+    pub fn finish(self) -> EvidenceGrid {
+        let Self {
+            mut grid,
+            params,
+            glass_echoes,
+            single_echoes,
+        } = self;
+        // Single echoes on the plane: opaque when brighter than the
+        // landmark's glass echoes by the ratio, glass otherwise (all opaque
+        // when the landmark has no dual-return glass echo to compare with).
+        let glass_median = glass_echoes.median();
+        grid.glass_echo_intensity = glass_median.map(|m| m as f32);
+        let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);
+        grid.opaque_intensity = threshold.map(|t| t as f32);
+        grid.peak_cos = params.peak_angle_deg.to_radians().cos();
+        for ((k, bits), n) in single_echoes {
+            let intensity = f32::from_bits(bits);
+            match threshold {
+                Some(th) if (intensity as f64) <= th => {
+                    if params.weak_single_echo_votes {
+                        grid.vote_echo_at(k, n)
+                    }
+                }
+                _ => grid.vote_at(k, 0, n),
+            }
+        }
+        grid.finalize();
+        grid
+    }
 }
 
 /// Votes of one frame that need the whole sequence to be weighed.
@@ -171,13 +252,45 @@ struct Votes {
     single_echoes: Vec<(Point2<f64>, f32)>,
 }
 
-fn median(v: &mut [f32]) -> Option<f64> {
-    if v.is_empty() {
-        return None;
+/// A multiset of intensities, counted per distinct value: its median is
+/// exact, and its size is the number of distinct values, not of echoes.
+#[derive(Debug, Clone, Default)]
+struct IntensityCounts {
+    /// Count per value, keyed in `f32::total_cmp` order.
+    counts: BTreeMap<i32, u64>,
+    len: u64,
+}
+
+impl IntensityCounts {
+    fn add(&mut self, x: f32) {
+        *self.counts.entry(total_order_key(x)).or_insert(0) += 1;
+        self.len += 1;
     }
-    let mid = v.len() / 2;
-    v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    Some(v[mid] as f64)
+
+    /// The value at position `len / 2` in sorted order (the upper median
+    /// for an even count), `None` when empty.
+    fn median(&self) -> Option<f64> {
+        let mid = self.len / 2;
+        let mut seen = 0;
+        for (&key, &n) in &self.counts {
+            seen += n;
+            if seen > mid {
+                return Some(from_total_order_key(key) as f64);
+            }
+        }
+        None
+    }
+}
+
+/// A key whose integer order is `f32::total_cmp`'s order.
+fn total_order_key(x: f32) -> i32 {
+    let bits = x.to_bits() as i32;
+    bits ^ (((bits >> 31) as u32) >> 1) as i32
+}
+
+/// The inverse of [`total_order_key`].
+fn from_total_order_key(key: i32) -> f32 {
+    f32::from_bits((key ^ (((key >> 31) as u32) >> 1) as i32) as u32)
 }
 
 /// Add one frame's transparent votes and collect its echoes on the plane;

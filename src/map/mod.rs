@@ -11,7 +11,9 @@ pub mod landmark;
 pub mod merge;
 pub mod panes;
 
-pub use evidence::{gather_evidence, EvidenceFrame, EvidenceParams};
+pub use evidence::{
+    gather_evidence, EvidenceFrame, EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
+};
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};

@@ -10,14 +10,19 @@ pub mod single_scan;
 pub mod slam;
 pub mod timings;
 
-pub use plane_optimized::{run_plane_optimized, PlaneOptimizedOutput};
-pub use sequence::Sequence;
-pub use single_scan::run_single_scan;
+pub use plane_optimized::{run_plane_optimized, run_plane_optimized_into, PlaneOptimizedOutput};
+pub use sequence::{stream_window, Sequence};
+pub use single_scan::{run_single_scan, run_single_scan_into};
 pub use slam::{optimize_tracked, run_slam, track_sequence, SlamOutput, Tracked};
 pub use timings::StageTimings;
 
+use nalgebra::Isometry3;
+
 use crate::classify::{Class, Rule, RuleTally};
+use crate::cloud::Frame;
 use crate::eval::Confusion;
+use crate::reflect::BoundedPlane;
+use crate::Result;
 
 /// One frame's result.
 #[derive(Debug, Clone)]
@@ -38,38 +43,97 @@ pub struct FrameOutput {
 /// A method's result over a sequence.
 #[derive(Debug, Clone)]
 pub struct RunOutput {
-    /// Per-frame results, in sequence order.
+    /// Per-frame results, in sequence order, when collected (empty when
+    /// the frames were handed to a [`FrameSink`] instead).
     pub frames: Vec<FrameOutput>,
+    /// Confusion counts against the labels (`None` when a frame carries
+    /// no labels).
+    pub confusion: Option<Confusion>,
+    /// Points by the rule that decided them, their prediction and their
+    /// label (label 0 for unlabelled frames).
+    pub rules: RuleTally,
     /// Time spent per stage.
     pub timings: StageTimings,
 }
 
-impl RunOutput {
-    /// Confusion counts against the sequence's labels (`None` when the frames
-    /// carry no labels).
-    pub fn confusion(&self, sequence: &Sequence) -> Option<Confusion> {
-        if !sequence.frames.iter().all(|f| f.has_labels) {
-            return None;
-        }
-        let mut c = Confusion::default();
-        for (f, out) in sequence.frames.iter().zip(&self.frames) {
-            c.add_pairs(
-                f.points
-                    .iter()
-                    .map(|p| p.label)
-                    .zip(out.classes.iter().copied()),
-            );
-        }
-        Some(c)
+/// Receives each frame's result as a run produces it, in sequence order:
+/// a long sequence's classes are written or summarised as they come, never
+/// held all at once.
+pub trait FrameSink {
+    /// Called once before the first frame with the reflective planes
+    /// (world frame) the frames are classified against; none for methods
+    /// without a map.
+    fn begin(&mut self, _planes: &[BoundedPlane]) -> Result<()> {
+        Ok(())
     }
 
-    /// Points by the rule that decided them, their prediction and their
-    /// label (label 0 for unlabelled frames).
-    pub fn rule_tally(&self, sequence: &Sequence) -> RuleTally {
-        let mut t = RuleTally::default();
-        for (f, out) in sequence.frames.iter().zip(&self.frames) {
-            t.add(f.points.iter().map(|p| p.label), &out.classes, &out.rules);
+    /// One frame's result. `frame` is the frame as read, `pose` its
+    /// `T_world_sensor` when known.
+    fn frame(
+        &mut self,
+        index: usize,
+        frame: &Frame,
+        pose: Option<&Isometry3<f64>>,
+        output: FrameOutput,
+    ) -> Result<()>;
+}
+
+/// Collecting sink: keeps every frame's result (short sequences, tests,
+/// tables).
+impl FrameSink for Vec<FrameOutput> {
+    fn frame(
+        &mut self,
+        _index: usize,
+        _frame: &Frame,
+        _pose: Option<&Isometry3<f64>>,
+        output: FrameOutput,
+    ) -> Result<()> {
+        self.push(output);
+        Ok(())
+    }
+}
+
+/// A sink that keeps nothing: the run's scores are all that is wanted.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Discard;
+
+impl FrameSink for Discard {
+    fn frame(
+        &mut self,
+        _index: usize,
+        _frame: &Frame,
+        _pose: Option<&Isometry3<f64>>,
+        _output: FrameOutput,
+    ) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// The scores a run accumulates frame by frame.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RunScore {
+    confusion: Confusion,
+    rules: RuleTally,
+    unlabelled: bool,
+}
+
+impl RunScore {
+    /// Count one frame's classes against its labels.
+    pub(crate) fn add(&mut self, frame: &Frame, output: &FrameOutput) {
+        self.unlabelled |= !frame.has_labels;
+        let labels = frame.points.iter().map(|p| p.label);
+        self.confusion
+            .add_pairs(labels.clone().zip(output.classes.iter().copied()));
+        self.rules.add(labels, &output.classes, &output.rules);
+    }
+
+    /// The run's output with these scores.
+    pub(crate) fn finish(self, frames: Vec<FrameOutput>, timings: StageTimings) -> RunOutput {
+        RunOutput {
+            frames,
+            confusion: (!self.unlabelled).then_some(self.confusion),
+            rules: self.rules,
+            timings,
         }
-        t
     }
 }

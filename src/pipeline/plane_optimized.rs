@@ -5,29 +5,40 @@
 //! 1. Detect reflective planes in each frame (sensor frame).
 //! 2. Transform them to the world frame and fuse them into the map in
 //!    timestamp order (`MapMerger`).
-//! 3. Keep the landmarks observed often enough.
-//! 4. Optionally gather the observed surfaces of all frames (mirror support).
+//! 3. Keep the landmarks observed often enough; gather each one's
+//!    transparency evidence and find its panes.
+//! 4. From keyframes: the observed surfaces (mirror support), the space
+//!    seen directly, and each landmark's echo-strength split.
 //! 5. Classify every frame against the kept landmarks.
+//!
+//! Every step that reads frames is a pass over the sequence
+//! ([`Sequence::stream`]): a window of frames at a time, in parallel, with
+//! only what must outlive the pass kept (the frames' reflective planes, the
+//! evidence grids, the space and support maps). Memory does not grow with
+//! the number of frames times their points, so a whole 3DRef sequence runs
+//! in the memory of a few frames plus the map.
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
-use rayon::prelude::*;
 
 use super::registry::{detector, merger, plane_map_classifier};
-use super::single_scan::{check_frame, organize_and_detect};
-use super::{FrameOutput, RunOutput, Sequence, StageTimings};
+use super::single_scan::{check_dual_returns, check_points, organize_and_detect};
+use super::{FrameOutput, FrameSink, RunOutput, RunScore, Sequence, StageTimings};
 use crate::classify::boundary::BeamPlanes;
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{
-    BeamHits, Class, Classifier, Decisions, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap,
-    WorldSupport,
+    BeamHits, Class, Classifier, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap,
+    SupportBuilder, WorldSupport,
 };
+use crate::cloud::Frame;
 use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
-use crate::map::{find_panes, gather_evidence, EvidenceFrame, PlaneMap, PlaneObservation};
+use crate::map::{
+    find_panes, EvidenceFrame, EvidenceGatherer, EvidenceTotal, PlaneMap, PlaneObservation,
+};
 use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{planes_seen_from, BoundedPlane, Detection, EchoHistogram, EchoSplit};
 use crate::sensor::{OrganizedScan, SensorModel};
@@ -36,7 +47,7 @@ use crate::{Error, Result};
 /// What the plane-optimized pipeline produces besides the classes.
 #[derive(Debug, Clone)]
 pub struct PlaneOptimizedOutput {
-    /// Per-frame classes and timings.
+    /// Scores, timings and (when collected) the per-frame classes.
     pub run: RunOutput,
     /// The fused map (every landmark, used or not).
     pub map: PlaneMap,
@@ -47,42 +58,73 @@ pub struct PlaneOptimizedOutput {
     pub planes: Vec<BoundedPlane>,
 }
 
-/// Run the plane-optimized pipeline. The sequence must carry poses.
+/// What the detection pass keeps of a frame: its reflective planes as
+/// world-frame observations, and how many it found.
+struct FrameSummary {
+    observations: Vec<PlaneObservation>,
+    planes: usize,
+    candidates: usize,
+}
+
+/// Run the plane-optimized pipeline and keep every frame's classes. The
+/// sequence must carry poses.
 pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<PlaneOptimizedOutput> {
+    let mut frames = Vec::with_capacity(sequence.len());
+    let mut out = run_plane_optimized_into(sequence, config, &mut frames)?;
+    out.run.frames = frames;
+    Ok(out)
+}
+
+/// Run the plane-optimized pipeline, handing every frame's classes to
+/// `sink` in sequence order (the returned run holds scores and timings, no
+/// frames). The sequence must carry poses.
+pub fn run_plane_optimized_into(
+    sequence: &Sequence,
+    config: &Config,
+    sink: &mut dyn FrameSink,
+) -> Result<PlaneOptimizedOutput> {
     let wall = Instant::now();
     let poses = sequence.poses.as_ref().ok_or_else(|| {
         Error::Input("the plane-optimized method needs a pose per frame (--poses FILE)".into())
     })?;
     let sensor = SensorModel::resolve(&config.sensor)?;
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
     let detector = detector(config, &sensor);
     let mut timings = StageTimings::default();
 
-    // 1. Per-frame detection (sensor frame), in parallel.
-    let bar = crate::progress::bar(sequence.len(), "detect");
-    let per_frame: Vec<(OrganizedScan, Detection, StageTimings)> = sequence
-        .frames
-        .par_iter()
-        .map(|frame| {
-            let out = organize_and_detect(frame, &sensor, detector.as_ref(), config.seed);
-            bar.inc(1);
-            out
-        })
-        .collect::<Result<_>>()?;
-    bar.finish_and_clear();
-    for (_, _, t) in &per_frame {
-        timings.merge(t);
-    }
+    // 1. Per-frame detection (sensor frame); a frame's planes are all that
+    // is kept of it.
+    let mut summaries = Vec::with_capacity(sequence.len());
+    let mut second_returns = 0;
+    let reading = sequence.stream_all(
+        "detect",
+        |k, frame| {
+            check_points(sequence, k, frame)?;
+            let (_, detection, t) =
+                organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
+            let summary = FrameSummary {
+                observations: observations(&detection, &poses[k], k),
+                planes: detection.planes.len(),
+                candidates: detection.candidates.len(),
+            };
+            Ok((summary, t))
+        },
+        |_, frame, (summary, t)| {
+            timings.merge(&t);
+            second_returns += frame.second_returns();
+            summaries.push(summary);
+            Ok(())
+        },
+    )?;
+    timings.add_reading(reading);
+    check_dual_returns(sequence, second_returns, config)?;
 
     // 2-3. Fuse into the map in timestamp order; keep well-observed landmarks.
     let start = Instant::now();
     let merger = merger(config);
     let mut map = PlaneMap::new();
-    for (k, (_, detection, _)) in per_frame.iter().enumerate() {
-        for obs in observations(detection, &poses[k], k) {
-            merger.merge(&mut map, &obs);
+    for summary in &summaries {
+        for obs in &summary.observations {
+            merger.merge(&mut map, obs);
         }
     }
     let used = map.reliable(poses, &config.map.selection());
@@ -98,18 +140,7 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
     // Transparency evidence of every used landmark over all frames, and the
     // panes found in it.
     if config.map.boundary != BoundaryMode::Hull {
-        let start = Instant::now();
-        let frames: Vec<EvidenceFrame<'_>> = (0..sequence.len())
-            .map(|k| EvidenceFrame {
-                frame: &sequence.frames[k],
-                scan: &per_frame[k].0,
-                pose: poses[k],
-            })
-            .collect();
-        for bp in &mut map_planes {
-            bp.evidence = gather_evidence(bp, &frames, &config.map.evidence).map(Arc::new);
-        }
-        timings.add("evidence", start.elapsed());
+        gather_evidence(sequence, &sensor, &mut map_planes, config, &mut timings)?;
         if config.map.boundary == BoundaryMode::Panes {
             let start = Instant::now();
             for bp in &mut map_planes {
@@ -123,114 +154,146 @@ pub fn run_plane_optimized(sequence: &Sequence, config: &Config) -> Result<Plane
         }
     }
 
-    // 4-5. Classify every frame against the map.
+    // 4. What the keyframes saw: surfaces, free space, echo strengths.
     let classifier = plane_map_classifier(config);
-    let input = |k: usize| FrameInput {
-        frame: &sequence.frames[k],
-        scan: &per_frame[k].0,
-        sensor: &sensor,
-        detection: &per_frame[k].1,
-        pose: poses[k],
-        map_planes: &map_planes,
-        support: None,
-        space: None,
-        beam_hits: None,
-    };
-    // The sequence's surface support, when used: the beam test of every
-    // frame (shared with the classification), then the surfaces it found.
-    let mut hits: Vec<BeamHits> = Vec::new();
-    let mut support = None;
-    let mut space = None;
     let p = classifier.params();
-    if p.sequence_support || p.decision.space_test {
-        let start = Instant::now();
-        hits = (0..sequence.len())
-            .into_par_iter()
-            .map(|k| classifier.beam_hits(&input(k)))
-            .collect();
-        timings.add("beam test", start.elapsed());
-    }
-    if p.sequence_support {
-        let start = Instant::now();
-        let views = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
-        support = Some(sequence_support(&classifier, &views, &hits, &input));
-        timings.add("support", start.elapsed());
-    }
-    // The space seen directly and the echo statistics behind each landmark,
-    // both from the same keyframes.
-    let space_views = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
-    if p.decision.space_test {
-        let start = Instant::now();
-        let map = seen_space(&classifier, &space_views, &hits, &input);
-        timings.add("space", start.elapsed());
+    let views = FrameViews {
+        sequence,
+        sensor: &sensor,
+        classifier: &classifier,
+        poses,
+    };
+    let support = if p.sequence_support {
+        let frames = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
+        Some(views.sequence_support(&frames, &map_planes, &mut timings)?)
+    } else {
+        None
+    };
+    let space_frames = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
+    let space = if p.decision.space_test {
+        let space = views.seen_space(&space_frames, &map_planes, &mut timings)?;
         tracing::info!(
-            keyframes = space_views.len(),
-            bricks = map.bricks(),
+            keyframes = space_frames.len(),
+            bricks = space.bricks(),
             "space seen directly"
         );
-        space = Some(map);
-    }
-    let splits = match (&space, p.echo_split.enabled) {
-        (Some(space), true) => {
-            let start = Instant::now();
-            let splits = fit_echo_splits(&classifier, &space_views, &hits, &input, space);
-            timings.add("echo split", start.elapsed());
-            Some(splits)
-        }
-        _ => None,
+        Some(space)
+    } else {
+        None
     };
     // The landmarks as classified: with their echo splits, when learned.
-    let classified_planes: Vec<BoundedPlane> = match splits {
-        Some(splits) => map_planes
-            .iter()
-            .zip(splits)
-            .map(|(bp, (echo_split, mirror))| BoundedPlane {
+    let classified_planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
+        (Some(space), true) => views
+            .echo_splits(&space_frames, &map_planes, space, &mut timings)?
+            .into_iter()
+            .zip(&map_planes)
+            .map(|((echo_split, mirror), bp)| BoundedPlane {
                 echo_split,
                 mirror,
                 ..bp.clone()
             })
             .collect(),
-        None => map_planes.clone(),
+        _ => map_planes,
     };
-    let input = |k: usize| FrameInput {
-        map_planes: &classified_planes,
-        ..input(k)
-    };
-    let bar = crate::progress::bar(sequence.len(), "classify");
-    let classified: Vec<(Decisions, std::time::Duration)> = (0..sequence.len())
-        .into_par_iter()
-        .map(|k| {
+
+    // 5. Classify every frame against the map.
+    sink.begin(&classified_planes)?;
+    let mut score = RunScore::default();
+    let reading = sequence.stream_all(
+        "classify",
+        |k, frame| {
+            let mut t = StageTimings::default();
+            let start = Instant::now();
+            let scan = OrganizedScan::build(frame, &sensor)?;
+            t.add("pair", start.elapsed());
             let start = Instant::now();
             let decisions = classifier.classify(&FrameInput {
                 support: support.as_ref(),
                 space: space.as_ref(),
-                beam_hits: hits.get(k),
-                ..input(k)
+                ..views.input(k, frame, &scan, &classified_planes)
             });
-            bar.inc(1);
-            (decisions, start.elapsed())
-        })
-        .collect();
-    bar.finish_and_clear();
-    let mut frames = Vec::with_capacity(sequence.len());
-    for (k, (decisions, d)) in classified.into_iter().enumerate() {
-        timings.add("classify", d);
-        frames.push(FrameOutput {
-            name: sequence.frames[k].name.clone(),
-            classes: decisions.classes,
-            rules: decisions.rules,
-            planes: per_frame[k].1.planes.len(),
-            candidates: per_frame[k].1.candidates.len(),
-        });
-    }
+            t.add("classify", start.elapsed());
+            Ok((decisions, t))
+        },
+        |k, frame, (decisions, t)| {
+            timings.merge(&t);
+            let output = FrameOutput {
+                name: frame.name.clone(),
+                classes: decisions.classes,
+                rules: decisions.rules,
+                planes: summaries[k].planes,
+                candidates: summaries[k].candidates,
+            };
+            score.add(frame, &output);
+            sink.frame(k, frame, Some(&poses[k]), output)
+        },
+    )?;
+    timings.add_reading(reading);
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
     Ok(PlaneOptimizedOutput {
-        run: RunOutput { frames, timings },
+        run: score.finish(Vec::new(), timings),
         map,
         used,
         planes: classified_planes,
     })
+}
+
+/// Gather the transparency evidence of every landmark in `planes` (world
+/// frame) in one pass over the sequence.
+fn gather_evidence(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &mut [BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<()> {
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let gatherers: Vec<Option<EvidenceGatherer>> = planes
+        .iter()
+        .map(|bp| EvidenceGatherer::new(bp, &config.map.evidence))
+        .collect();
+    let mut totals: Vec<Option<EvidenceTotal>> = gatherers
+        .iter()
+        .map(|g| g.as_ref().map(EvidenceGatherer::total))
+        .collect();
+    if gatherers.iter().any(Option::is_some) {
+        let reading = sequence.stream_all(
+            "evidence",
+            |k, frame| {
+                let mut t = StageTimings::default();
+                let start = Instant::now();
+                let scan = OrganizedScan::build(frame, sensor)?;
+                t.add("pair", start.elapsed());
+                let start = Instant::now();
+                let f = EvidenceFrame {
+                    frame,
+                    scan: &scan,
+                    pose: poses[k],
+                };
+                let votes: Vec<_> = gatherers
+                    .iter()
+                    .map(|g| g.as_ref().map(|g| g.votes(&f)))
+                    .collect();
+                t.add("evidence", start.elapsed());
+                Ok((votes, t))
+            },
+            |_, _, (votes, t)| {
+                timings.merge(&t);
+                for (total, v) in totals.iter_mut().zip(votes) {
+                    if let (Some(total), Some(v)) = (total, v) {
+                        total.add(v);
+                    }
+                }
+                Ok(())
+            },
+        )?;
+        timings.add_reading(reading);
+    }
+    for (bp, total) in planes.iter_mut().zip(totals) {
+        bp.evidence = total.map(|t| Arc::new(t.finish()));
+    }
+    Ok(())
 }
 
 /// A frame's reflective planes as world-frame observations.
@@ -270,225 +333,367 @@ pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> 
     kept
 }
 
-/// The observed surfaces of the keyframes (world frame), thinned by voxel;
-/// `hits` holds every frame's beam test.
-fn sequence_support<'a>(
-    classifier: &PlaneMapClassifier,
-    frames: &[usize],
-    hits: &[BeamHits],
-    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
-) -> WorldSupport {
-    // Indices only (4 bytes a point): the world points are made as the
-    // support consumes them, in frame order.
-    let per_frame: Vec<Vec<u32>> = frames
-        .par_iter()
-        .map(|&k| classifier.surface_points(&input(k), &hits[k]))
-        .collect();
-    let params = classifier.params();
-    let points = frames.iter().zip(&per_frame).flat_map(|(&k, indices)| {
-        let inp = input(k);
-        let (r, t) = rotation_translation(&inp.pose);
-        let points = &inp.frame.points;
-        indices
-            .iter()
-            .map(move |&i| Point3::from(r * points[i as usize].position().coords + t))
-    });
-    WorldSupport::build(points, params.support_voxel, params.decision.support_radius)
+/// What the keyframe passes share: the sequence, how to pair a frame's
+/// returns, the classifier's beam test and the poses.
+struct FrameViews<'a> {
+    sequence: &'a Sequence,
+    sensor: &'a SensorModel,
+    classifier: &'a PlaneMapClassifier,
+    poses: &'a [Isometry3<f64>],
 }
 
-/// The space seen directly from the keyframes `frames` (world frame):
-/// every beam that crosses no reflective pane marks its endpoint occupied
-/// and carves the voxels before it; a beam that crosses a pane carves only
-/// up to the pane. Of a beam's two returns only the nearer is used: the
-/// farther may have passed an unmapped pane. `hits` holds every frame's beam
-/// test.
-fn seen_space<'a>(
-    classifier: &PlaneMapClassifier,
-    frames: &[usize],
-    hits: &[BeamHits],
-    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
-) -> SpaceMap {
-    let p = classifier.params();
-    let glass = p.decision.glass_distance;
-    let mut space = SpaceMap::new(p.space_voxel, p.space_min_passes, p.space_block_hits);
-    let min_stop = 2.0 * space.voxel();
-    let stride = p.space_column_stride.max(1);
-    for &k in frames {
-        let inp = input(k);
-        let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
-        let (r, t) = rotation_translation(&inp.pose);
-        let origin = Point3::from(t);
-        let points = &inp.frame.points;
-        for (i, pt) in points.iter().enumerate() {
-            let range = pt.range();
-            if !(range > 0.0) {
-                continue;
-            }
-            if inp
-                .scan
-                .partner(i)
-                .is_some_and(|j| points[j].range() < range)
-            {
-                continue;
-            }
-            let pos = pt.position();
-            let (end_range, hit) = match hits[k].get(i, &pos, &planes) {
-                Some(h) if range >= h.range - glass => (h.range.min(range), false),
-                _ => (range, true),
-            };
-            let end = Point3::from(r * (pos.coords * (end_range / range)) + t);
-            // Every beam marks its surface; one in `stride` columns carves.
-            let (_, col) = inp.scan.ring_column(inp.scan.cell_of(i));
-            let stop = if col % stride == 0 {
-                min_stop.max(p.space_stop_ratio * range)
-            } else {
-                f64::INFINITY
-            };
-            space.add_beam(&origin, &end, stop, hit);
+/// The detection the plane-map classifier is given: it classifies against
+/// the map, not the frame's own planes.
+static NO_DETECTION: Detection = Detection {
+    candidates: Vec::new(),
+    planes: Vec::new(),
+};
+
+impl<'a> FrameViews<'a> {
+    /// The classifier's input for frame `k` against `planes` (no support,
+    /// space or precomputed beam test).
+    fn input<'b>(
+        &'b self,
+        k: usize,
+        frame: &'b Frame,
+        scan: &'b OrganizedScan,
+        planes: &'b [BoundedPlane],
+    ) -> FrameInput<'b> {
+        FrameInput {
+            frame,
+            scan,
+            sensor: self.sensor,
+            detection: &NO_DETECTION,
+            pose: self.poses[k],
+            map_planes: planes,
+            support: None,
+            space: None,
+            beam_hits: None,
         }
     }
-    space
+
+    /// One pass over the keyframes `frames`: `work` gets each frame's
+    /// input with its beam test against `planes`.
+    fn pass<T: Send>(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        stage: &'static str,
+        timings: &mut StageTimings,
+        work: impl Fn(&FrameInput<'_>, &BeamHits) -> T + Sync,
+        mut consume: impl FnMut(T),
+    ) -> Result<()> {
+        let mut cpu = StageTimings::default();
+        let reading = self.sequence.stream(
+            frames,
+            stage,
+            |k, frame| {
+                let start = Instant::now();
+                let scan = OrganizedScan::build(frame, self.sensor)?;
+                let input = self.input(k, frame, &scan, planes);
+                let hits = self.classifier.beam_hits(&input);
+                Ok((work(&input, &hits), start.elapsed()))
+            },
+            |_, _, (out, d)| {
+                cpu.add(stage, d);
+                consume(out);
+                Ok(())
+            },
+        )?;
+        timings.merge(&cpu);
+        timings.add_reading(reading);
+        Ok(())
+    }
+
+    /// The observed surfaces of the keyframes `frames` (world frame),
+    /// thinned by voxel.
+    fn sequence_support(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        timings: &mut StageTimings,
+    ) -> Result<WorldSupport> {
+        let p = self.classifier.params();
+        let mut builder = SupportBuilder::new(p.support_voxel, p.decision.support_radius);
+        self.pass(
+            frames,
+            planes,
+            "support",
+            timings,
+            |input, hits| {
+                let (r, t) = rotation_translation(&input.pose);
+                let points = &input.frame.points;
+                self.classifier
+                    .surface_points(input, hits)
+                    .into_iter()
+                    .map(|i| Point3::from(r * points[i as usize].position().coords + t))
+                    .collect::<Vec<_>>()
+            },
+            |points| builder.extend(points),
+        )?;
+        Ok(builder.finish())
+    }
+
+    /// The space seen directly from the keyframes `frames` (world frame):
+    /// every beam that crosses no reflective pane marks its endpoint
+    /// occupied and carves the voxels before it; a beam that crosses a pane
+    /// carves only up to the pane. Of a beam's two returns only the nearer
+    /// is used: the farther may have passed an unmapped pane.
+    fn seen_space(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        timings: &mut StageTimings,
+    ) -> Result<SpaceMap> {
+        let p = self.classifier.params();
+        let glass = p.decision.glass_distance;
+        let mut space = SpaceMap::new(p.space_voxel, p.space_min_passes, p.space_block_hits);
+        let min_stop = 2.0 * space.voxel();
+        let stride = p.space_column_stride.max(1);
+        self.pass(
+            frames,
+            planes,
+            "space",
+            timings,
+            |inp, hits| {
+                let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
+                let (r, t) = rotation_translation(&inp.pose);
+                let points = &inp.frame.points;
+                let mut beams = Vec::with_capacity(points.len());
+                for (i, pt) in points.iter().enumerate() {
+                    let range = pt.range();
+                    if !(range > 0.0) {
+                        continue;
+                    }
+                    if inp
+                        .scan
+                        .partner(i)
+                        .is_some_and(|j| points[j].range() < range)
+                    {
+                        continue;
+                    }
+                    let pos = pt.position();
+                    let (end_range, hit) = match hits.get(i, &pos, &sensor_planes) {
+                        Some(h) if range >= h.range - glass => (h.range.min(range), false),
+                        _ => (range, true),
+                    };
+                    let end = Point3::from(r * (pos.coords * (end_range / range)) + t);
+                    // Every beam marks its surface; one in `stride` columns
+                    // carves.
+                    let (_, col) = inp.scan.ring_column(inp.scan.cell_of(i));
+                    let stop = if col % stride == 0 {
+                        min_stop.max(p.space_stop_ratio * range)
+                    } else {
+                        f64::INFINITY
+                    };
+                    beams.push((end, stop, hit));
+                }
+                (Point3::from(t), beams)
+            },
+            |(origin, beams)| {
+                for (end, stop, hit) in beams {
+                    space.add_beam(&origin, &end, stop, hit);
+                }
+            },
+        )?;
+        Ok(space)
+    }
+
+    /// Each plane's split of echoes behind it into reflected and
+    /// transmitted ones ([`EchoSplit`]), and whether it is a mirror, from
+    /// the keyframes `frames`: the strengths of every point behind the
+    /// plane, oriented by the points whose mirror image lies in seen-free
+    /// space (they cannot be reflections; a plane with almost none is a
+    /// mirror).
+    fn echo_splits(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        space: &SpaceMap,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<(Option<EchoSplit>, bool)>> {
+        let p = self.classifier.params();
+        let behind = p.decision.behind_distance;
+        let glass = p.decision.glass_distance;
+        let clearance = p.decision.space_clearance_ratio;
+        let exponent = p.echo_split.range_exponent;
+        let incidence = p.echo_split.incidence_correction;
+        // Per landmark: the strengths of all points behind it, and of its
+        // anchors, summed over the keyframes (integer counts: the result
+        // does not depend on the order or the threads).
+        let empty = || vec![(EchoHistogram::default(), EchoHistogram::default()); planes.len()];
+        let mut totals = empty();
+        self.pass(
+            frames,
+            planes,
+            "echo split",
+            timings,
+            |inp, hits| {
+                let mut out = empty();
+                let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
+                let view = space.in_sensor_frame(inp.pose);
+                let beams = BeamPlanes::hulls(&sensor_planes, p.hull_margin);
+                for (i, pt) in inp.frame.points.iter().enumerate() {
+                    let pos = pt.position();
+                    let Some(h) = hits.get(i, &pos, &sensor_planes) else {
+                        continue;
+                    };
+                    let range = pos.coords.norm();
+                    // Only beams behind one pane: past a second one the
+                    // mirror of the first says nothing.
+                    if range - h.range <= behind
+                        || beams.second_pane(&pos, h.plane, h.range, glass, behind)
+                    {
+                        continue;
+                    }
+                    let cos = if incidence {
+                        inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
+                    } else {
+                        1.0
+                    };
+                    let strength = echo_strength(pt.intensity, range, exponent, cos);
+                    out[h.plane].0.add(strength);
+                    let mirrored = sensor_planes[h.plane].plane.mirror(&pos);
+                    if view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free {
+                        out[h.plane].1.add(strength);
+                    }
+                }
+                out
+            },
+            |frame_counts| {
+                for ((all, anchors), (all_f, anchors_f)) in totals.iter_mut().zip(&frame_counts) {
+                    all.merge(all_f);
+                    anchors.merge(anchors_f);
+                }
+            },
+        )?;
+        Ok(totals
+            .into_iter()
+            .enumerate()
+            .map(|(j, (all, anchors))| {
+                let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
+                let mirror = is_mirror(&all, &anchors, &p.echo_split);
+                tracing::debug!(
+                    plane = j,
+                    behind = all.total(),
+                    anchors = anchors.total(),
+                    ?split,
+                    mirror,
+                    "echo split"
+                );
+                (split, mirror)
+            })
+            .collect())
+    }
 }
 
-/// Each map plane's split of echoes behind it into reflected and
-/// transmitted ones ([`EchoSplit`]), and whether it is a mirror, from the
-/// keyframes `frames`: the strengths of every point behind the plane,
-/// oriented by the points whose mirror image lies in seen-free space (they
-/// cannot be reflections; a plane with almost none is a mirror).
-fn fit_echo_splits<'a>(
-    classifier: &PlaneMapClassifier,
-    frames: &[usize],
-    hits: &[BeamHits],
-    input: &(dyn Fn(usize) -> FrameInput<'a> + Sync),
-    space: &SpaceMap,
-) -> Vec<(Option<EchoSplit>, bool)> {
-    let p = classifier.params();
-    let behind = p.decision.behind_distance;
-    let glass = p.decision.glass_distance;
-    let clearance = p.decision.space_clearance_ratio;
-    let exponent = p.echo_split.range_exponent;
-    let incidence = p.echo_split.incidence_correction;
-    let n = frames.first().map_or(0, |&k| input(k).map_planes.len());
-    // Per landmark: the strengths of all points behind it, and of its
-    // anchors; summed over the keyframes by each worker, then merged (the
-    // counts are integers, so the result does not depend on the threads).
-    let empty = || vec![(EchoHistogram::default(), EchoHistogram::default()); n];
-    let totals = frames
-        .par_iter()
-        .fold(empty, |mut out, &k| {
-            let inp = input(k);
-            let planes = PlaneMapClassifier::planes_in_sensor_frame(&inp);
-            let view = space.in_sensor_frame(inp.pose);
-            let beams = BeamPlanes::hulls(&planes, p.hull_margin);
-            for (i, pt) in inp.frame.points.iter().enumerate() {
-                let pos = pt.position();
-                let Some(h) = hits[k].get(i, &pos, &planes) else {
-                    continue;
-                };
-                let range = pos.coords.norm();
-                // Only beams behind one pane: past a second one the mirror
-                // of the first says nothing.
-                if range - h.range <= behind
-                    || beams.second_pane(&pos, h.plane, h.range, glass, behind)
-                {
-                    continue;
-                }
-                let cos = if incidence {
-                    inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
-                } else {
-                    1.0
-                };
-                let strength = echo_strength(pt.intensity, range, exponent, cos);
-                out[h.plane].0.add(strength);
-                let mirrored = planes[h.plane].plane.mirror(&pos);
-                if view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free {
-                    out[h.plane].1.add(strength);
-                }
-            }
-            out
-        })
-        .reduce(empty, |mut a, b| {
-            for ((all, anchors), (all_b, anchors_b)) in a.iter_mut().zip(&b) {
-                all.merge(all_b);
-                anchors.merge(anchors_b);
-            }
-            a
-        });
-    totals
-        .into_iter()
-        .enumerate()
-        .map(|(j, (all, anchors))| {
-            let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
-            let mirror = is_mirror(&all, &anchors, &p.echo_split);
-            tracing::debug!(
-                plane = j,
-                behind = all.total(),
-                anchors = anchors.total(),
-                ?split,
-                mirror,
-                "echo split"
-            );
-            (split, mirror)
-        })
-        .collect()
+/// The classified map in the world frame ("around the corner"), built a
+/// frame at a time: Normal, reflective-surface and Obstacle points where
+/// they were measured, Reflections mirrored back through their plane;
+/// unclassified points are left out. Thinned to one point per `voxel` per
+/// class (0 keeps all), so it grows with the space mapped, not with the
+/// frames.
+pub struct AroundCornerMap {
+    planes: Vec<BoundedPlane>,
+    hull_margin: f64,
+    thin: Thinning,
 }
 
-/// The classified map in the world frame ("around the corner"): Normal,
-/// reflective-surface and Obstacle points where they were measured,
-/// Reflections mirrored back through their plane; unclassified points are
-/// left out. Thinned to one point per `voxel` per class (0 keeps all).
+impl AroundCornerMap {
+    /// An empty map against the reflective `planes` (world frame).
+    pub fn new(planes: &[BoundedPlane], hull_margin: f64, voxel: f64) -> Self {
+        Self {
+            planes: planes.to_vec(),
+            hull_margin,
+            thin: Thinning::new(voxel),
+        }
+    }
+
+    /// Add a frame with its pose and classes.
+    pub fn add(&mut self, frame: &Frame, pose: &Isometry3<f64>, classes: &[Class]) {
+        let planes = planes_seen_from(&self.planes, pose);
+        let mirrored = mirror_reflections(frame, classes, &planes, self.hull_margin);
+        let (r, t) = rotation_translation(pose);
+        for (pt, &class) in frame.points.iter().zip(classes) {
+            if matches!(class, Class::Normal | Class::Glass | Class::Obstacle) {
+                self.thin
+                    .offer(Point3::from(r * pt.position().coords + t), class, false);
+            }
+        }
+        for (_, q) in mirrored {
+            self.thin.offer(pose * q, Class::Reflection, true);
+        }
+    }
+
+    /// The map's points, in the order they were kept.
+    pub fn into_points(self) -> Vec<MapPoint> {
+        self.thin.kept
+    }
+}
+
+/// The accumulated classified map in the world frame, built a frame at a
+/// time: every classified point where it was measured (reflections
+/// included, not mirrored); unclassified points are left out. Thinned to
+/// one point per `voxel` per class (0 keeps all).
+pub struct MeasuredMap {
+    thin: Thinning,
+}
+
+impl MeasuredMap {
+    /// An empty map.
+    pub fn new(voxel: f64) -> Self {
+        Self {
+            thin: Thinning::new(voxel),
+        }
+    }
+
+    /// Add a frame with its pose and classes.
+    pub fn add(&mut self, frame: &Frame, pose: &Isometry3<f64>, classes: &[Class]) {
+        for (pt, &class) in frame.points.iter().zip(classes) {
+            if class != Class::Unclassified {
+                self.thin.offer(pose * pt.position(), class, false);
+            }
+        }
+    }
+
+    /// The map's points, in the order they were kept.
+    pub fn into_points(self) -> Vec<MapPoint> {
+        self.thin.kept
+    }
+}
+
+/// [`AroundCornerMap`] of a sequence and its classes (empty without poses).
 pub fn around_corner_map(
     sequence: &Sequence,
     classes: &[Vec<Class>],
     map_planes: &[BoundedPlane],
     hull_margin: f64,
     voxel: f64,
-) -> Vec<MapPoint> {
+) -> Result<Vec<MapPoint>> {
     let Some(poses) = &sequence.poses else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
-    // The mirrored reflections of every frame (the beam tests), in parallel.
-    let mirrored: Vec<Vec<(usize, Point3<f64>)>> = (0..sequence.len().min(classes.len()))
-        .into_par_iter()
-        .map(|k| {
-            let planes = planes_seen_from(map_planes, &poses[k]);
-            mirror_reflections(&sequence.frames[k], &classes[k], &planes, hull_margin)
-        })
-        .collect();
-    // Thinned in one pass in frame order, no per-point buffers in between.
-    let mut thin = Thinning::new(voxel);
-    for (k, mirrored) in mirrored.iter().enumerate() {
-        let pose = poses[k];
-        let (r, t) = rotation_translation(&pose);
-        for (pt, &class) in sequence.frames[k].points.iter().zip(&classes[k]) {
-            if matches!(class, Class::Normal | Class::Glass | Class::Obstacle) {
-                thin.offer(Point3::from(r * pt.position().coords + t), class, false);
-            }
-        }
-        for (_, q) in mirrored {
-            thin.offer(pose * q, Class::Reflection, true);
-        }
+    let mut map = AroundCornerMap::new(map_planes, hull_margin, voxel);
+    for k in 0..sequence.len().min(classes.len()) {
+        map.add(&*sequence.frame(k)?, &poses[k], &classes[k]);
     }
-    thin.kept
+    Ok(map.into_points())
 }
 
-/// The accumulated classified map in the world frame: every classified point
-/// where it was measured (reflections included, not mirrored); unclassified
-/// points are left out. Thinned to one point per `voxel` per class (0 keeps
-/// all). Empty without poses.
-pub fn measured_map(sequence: &Sequence, classes: &[Vec<Class>], voxel: f64) -> Vec<MapPoint> {
+/// [`MeasuredMap`] of a sequence and its classes (empty without poses).
+pub fn measured_map(
+    sequence: &Sequence,
+    classes: &[Vec<Class>],
+    voxel: f64,
+) -> Result<Vec<MapPoint>> {
     let Some(poses) = &sequence.poses else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
-    let mut thin = Thinning::new(voxel);
+    let mut map = MeasuredMap::new(voxel);
     for k in 0..sequence.len().min(classes.len()) {
-        for (pt, &class) in sequence.frames[k].points.iter().zip(&classes[k]) {
-            if class != Class::Unclassified {
-                thin.offer(poses[k] * pt.position(), class, false);
-            }
-        }
+        map.add(&*sequence.frame(k)?, &poses[k], &classes[k]);
     }
-    thin.kept
+    Ok(map.into_points())
 }
 
 /// A pose as rotation matrix and translation: applied to every point of a

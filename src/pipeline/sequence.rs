@@ -1,5 +1,14 @@
-//! A sequence of frames with their poses.
+//! A sequence of frames with their poses, read pass by pass.
+//!
+//! A whole 3DRef sequence (thousands of 1-2 MB frames) does not fit in
+//! memory, and the methods do not need it to: each pass over the sequence
+//! (detect, gather evidence, classify) reads a window of frames, works on
+//! them in parallel and hands the results on in sequence order before the
+//! next window is read ([`Sequence::stream`]). A sequence opened from a
+//! directory keeps only the file list; one built from frames already in
+//! memory (the simulator, a ROS 2 bag, tests) lends them out.
 
+use std::borrow::Cow;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -11,28 +20,40 @@ use crate::cloud::Frame;
 use crate::io::{self, FrameEntry};
 use crate::Result;
 
-/// Frames of one directory in timestamp order, with their poses when given.
+/// Frames of one sequence in timestamp order, with their poses when given.
 #[derive(Debug, Clone)]
 pub struct Sequence {
-    /// The frame files.
+    /// The frame files (or, for frames built in memory, their names).
     pub entries: Vec<FrameEntry>,
-    /// The parsed frames, same order.
-    pub frames: Vec<Frame>,
     /// `T_world_sensor` per frame (matched by timestamp), when known.
     pub poses: Option<Vec<Isometry3<f64>>>,
+    /// Where the points are.
+    store: FrameStore,
+}
+
+/// Where a sequence's points are: parsed once and held, or read from their
+/// files at every pass.
+#[derive(Debug, Clone)]
+enum FrameStore {
+    Memory(Vec<Frame>),
+    Files,
+}
+
+/// Frames handled at once by [`Sequence::stream`]: enough to keep every
+/// thread busy, few enough that the frames in flight stay a small,
+/// fixed amount of memory.
+pub fn stream_window() -> usize {
+    (4 * rayon::current_num_threads()).max(8)
 }
 
 impl Sequence {
-    /// Load every `*.ply` frame of `dir` (in parallel) and, when `poses` is
-    /// given, match each frame to a pose by timestamp within `tolerance`
-    /// seconds. Parsing time is recorded in `timings` as stage "parse".
-    pub fn load(
-        dir: &Path,
-        poses: Option<&Path>,
-        tolerance: f64,
-        timings: &mut StageTimings,
-    ) -> Result<Self> {
-        let entries = io::list_frames(dir)?;
+    /// The `*.ply` frames of `dir` (or of the 3DRef release layout
+    /// `dir/raycast/hesai/`, see [`io::frame_dir`]) and, when `poses` is
+    /// given, each frame's pose matched by timestamp within `tolerance`
+    /// seconds. Nothing is parsed: every pass reads the frames it needs.
+    pub fn open(dir: &Path, poses: Option<&Path>, tolerance: f64) -> Result<Self> {
+        let dir = io::frame_dir(dir);
+        let entries = io::list_frames(&dir)?;
         // Poses first: a missing pose is reported before any parsing work.
         let poses = match poses {
             Some(path) => {
@@ -41,8 +62,26 @@ impl Sequence {
             }
             None => None,
         };
-        let bar = crate::progress::bar(entries.len(), "parse");
-        let parsed: Vec<(Frame, Duration)> = entries
+        Ok(Self {
+            entries,
+            poses,
+            store: FrameStore::Files,
+        })
+    }
+
+    /// Like [`open`](Self::open), then parse every frame (in parallel) and
+    /// keep them in memory: for small sequences read many times (tests,
+    /// benchmarks). Parsing time is recorded in `timings` as stage "parse".
+    pub fn load(
+        dir: &Path,
+        poses: Option<&Path>,
+        tolerance: f64,
+        timings: &mut StageTimings,
+    ) -> Result<Self> {
+        let mut sequence = Self::open(dir, poses, tolerance)?;
+        let bar = crate::progress::bar(sequence.len(), "parse");
+        let parsed: Vec<(Frame, Duration)> = sequence
+            .entries
             .par_iter()
             .map(|e| {
                 let start = Instant::now();
@@ -52,17 +91,13 @@ impl Sequence {
             })
             .collect::<Result<_>>()?;
         bar.finish_and_clear();
-        tracing::debug!(frames = parsed.len(), dir = %dir.display(), "frames parsed");
         let mut frames = Vec::with_capacity(parsed.len());
         for (f, d) in parsed {
             timings.add("parse", d);
             frames.push(f);
         }
-        Ok(Self {
-            entries,
-            frames,
-            poses,
-        })
+        sequence.store = FrameStore::Memory(frames);
+        Ok(sequence)
     }
 
     /// A sequence of frames already in memory (e.g. from the simulator),
@@ -91,23 +126,101 @@ impl Sequence {
             .collect();
         Ok(Self {
             entries,
-            frames,
             poses,
+            store: FrameStore::Memory(frames),
         })
     }
 
     /// Number of frames.
     pub fn len(&self) -> usize {
-        self.frames.len()
+        self.entries.len()
     }
 
     /// Whether the sequence has no frame.
     pub fn is_empty(&self) -> bool {
-        self.frames.is_empty()
+        self.entries.is_empty()
     }
 
     /// The file a frame came from (for error messages).
     pub fn path(&self, index: usize) -> &Path {
         &self.entries[index].path
+    }
+
+    /// Frame names (file stems), sequence order.
+    pub fn names(&self) -> Vec<String> {
+        self.entries.iter().map(|e| e.name.clone()).collect()
+    }
+
+    /// The frames, when the sequence holds them in memory (`None` when
+    /// they are read from their files at every pass).
+    pub fn in_memory(&self) -> Option<&[Frame]> {
+        match &self.store {
+            FrameStore::Memory(frames) => Some(frames),
+            FrameStore::Files => None,
+        }
+    }
+
+    /// Frame `index`: lent from memory, or read from its file (the error
+    /// names the file).
+    pub fn frame(&self, index: usize) -> Result<Cow<'_, Frame>> {
+        match &self.store {
+            FrameStore::Memory(frames) => Ok(Cow::Borrowed(&frames[index])),
+            FrameStore::Files => io::read_frame(&self.entries[index].path).map(Cow::Owned),
+        }
+    }
+
+    /// One pass over the frames `indices` (sequence order): `work` runs on
+    /// each frame in parallel, a window of frames at a time, and `consume`
+    /// receives every frame with its result in the order of `indices`
+    /// before the next window is read. Only a window of frames is ever in
+    /// memory. The first error (reading a frame, `work` or `consume`) ends
+    /// the pass. Returns the time spent reading frames from their files;
+    /// `stage` labels the progress bar.
+    pub fn stream<T, W, C>(
+        &self,
+        indices: &[usize],
+        stage: &'static str,
+        work: W,
+        mut consume: C,
+    ) -> Result<Duration>
+    where
+        T: Send,
+        W: Fn(usize, &Frame) -> Result<T> + Sync,
+        C: FnMut(usize, &Frame, T) -> Result<()>,
+    {
+        let bar = crate::progress::bar(indices.len(), stage);
+        let mut reading = Duration::ZERO;
+        for window in indices.chunks(stream_window()) {
+            let results: Vec<(Cow<'_, Frame>, T, Duration)> = window
+                .par_iter()
+                .map(|&k| {
+                    let start = Instant::now();
+                    let frame = self.frame(k)?;
+                    let read = start.elapsed();
+                    let out = work(k, &frame)?;
+                    bar.inc(1);
+                    Ok((frame, out, read))
+                })
+                .collect::<Result<_>>()?;
+            for (&k, (frame, out, read)) in window.iter().zip(results) {
+                if let Cow::Owned(_) = frame {
+                    reading += read;
+                }
+                consume(k, &frame, out)?;
+            }
+        }
+        bar.finish_and_clear();
+        Ok(reading)
+    }
+
+    /// [`stream`](Self::stream) over every frame.
+    pub fn stream_all<T, W, C>(&self, stage: &'static str, work: W, consume: C) -> Result<Duration>
+    where
+        T: Send,
+        W: Fn(usize, &Frame) -> Result<T> + Sync,
+        C: FnMut(usize, &Frame, T) -> Result<()>,
+    {
+        let all: Vec<usize> = (0..self.len()).collect();
+        self.stream(&all, stage, work, consume)
     }
 }

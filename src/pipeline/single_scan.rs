@@ -2,10 +2,8 @@
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::registry::{detector, frame_seed, single_scan_classifier};
-use super::{FrameOutput, RunOutput, Sequence, StageTimings};
+use super::{FrameOutput, FrameSink, RunOutput, RunScore, Sequence, StageTimings};
 use crate::classify::FrameInput;
 use crate::cloud::Frame;
 use crate::config::Config;
@@ -13,40 +11,41 @@ use crate::reflect::{CandidateSource, Detection, ReflectiveDetector};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
-/// Check that a frame can be processed by the configured detector: it has
-/// points, and the sequence carries dual returns when the detector needs them.
-pub(crate) fn check_frame(sequence: &Sequence, index: usize, config: &Config) -> Result<()> {
-    let frame = &sequence.frames[index];
+/// Check that a frame can be processed: it has points (the error names
+/// the file the frame came from).
+pub(crate) fn check_points(sequence: &Sequence, index: usize, frame: &Frame) -> Result<()> {
     if frame.points.is_empty() {
         return Err(Error::Input(format!(
             "{}: frame has no points",
             sequence.path(index).display()
         )));
     }
-    // A frame without second returns is normal inside a dual-return sequence
-    // (no glass in view); a sequence without any is not dual-return data.
-    let dual_data = || {
-        sequence
-            .frames
-            .iter()
-            .any(|f| f.points.iter().any(|p| p.ret == 2))
-    };
-    if config.detector.name == CandidateSource::DualReturn
-        && frame.second_returns() == 0
-        && !dual_data()
-    {
-        let what = if sequence.len() == 1 {
-            "the frame has no second return"
-        } else {
-            "no frame of the sequence has a second return"
-        };
-        return Err(Error::Input(format!(
-            "{}: {what}; the dual-return detector needs dual-return data \
-             (use [detector] name = \"intensity-peak\" for single-return scans)",
-            sequence.path(index).display()
-        )));
-    }
     Ok(())
+}
+
+/// Check, after a pass over the whole sequence that counted
+/// `second_returns`, that the sequence carries dual returns when the
+/// configured detector needs them. A frame without second returns is
+/// normal inside a dual-return sequence (no glass in view); a sequence
+/// without any is not dual-return data.
+pub(crate) fn check_dual_returns(
+    sequence: &Sequence,
+    second_returns: usize,
+    config: &Config,
+) -> Result<()> {
+    if config.detector.name != CandidateSource::DualReturn || second_returns > 0 {
+        return Ok(());
+    }
+    let what = if sequence.len() == 1 {
+        "the frame has no second return"
+    } else {
+        "no frame of the sequence has a second return"
+    };
+    Err(Error::Input(format!(
+        "{}: {what}; the dual-return detector needs dual-return data \
+         (use [detector] name = \"intensity-peak\" for single-return scans)",
+        sequence.path(0).display()
+    )))
 }
 
 /// Pair a frame's returns on the sensor grid and detect its reflective
@@ -67,57 +66,67 @@ pub(crate) fn organize_and_detect(
     Ok((scan, detection, t))
 }
 
-/// Run the single-scan method over every frame (in parallel; the result does
-/// not depend on the thread count).
+/// Run the single-scan method over every frame and keep the results.
 pub fn run_single_scan(sequence: &Sequence, config: &Config) -> Result<RunOutput> {
+    let mut frames = Vec::with_capacity(sequence.len());
+    let mut out = run_single_scan_into(sequence, config, &mut frames)?;
+    out.frames = frames;
+    Ok(out)
+}
+
+/// Run the single-scan method over every frame (in parallel, a window at a
+/// time; the result does not depend on the thread count), handing each
+/// frame's result to `sink` in sequence order. The returned output holds
+/// the scores and timings, no frames.
+pub fn run_single_scan_into(
+    sequence: &Sequence,
+    config: &Config,
+    sink: &mut dyn FrameSink,
+) -> Result<RunOutput> {
     let wall = Instant::now();
     let sensor = SensorModel::resolve(&config.sensor)?;
     let detector = detector(config, &sensor);
     let classifier = single_scan_classifier(config);
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
-    let bar = crate::progress::bar(sequence.len(), "classify");
-    let results: Vec<(FrameOutput, StageTimings)> = sequence
-        .frames
-        .par_iter()
-        .inspect(|_| bar.inc(1))
-        .map(|frame| {
-            let (scan, detection, mut t) =
-                organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
-            let start = Instant::now();
-            let decisions = classifier.classify(&FrameInput {
-                beam_hits: None,
-                frame,
-                scan: &scan,
-                sensor: &sensor,
-                detection: &detection,
-                pose: nalgebra::Isometry3::identity(),
-                map_planes: &[],
-                support: None,
-                space: None,
-            });
-            t.add("classify", start.elapsed());
-            t.frames = 1;
-            Ok((
-                FrameOutput {
-                    name: frame.name.clone(),
-                    classes: decisions.classes,
-                    rules: decisions.rules,
-                    planes: detection.planes.len(),
-                    candidates: detection.candidates.len(),
-                },
-                t,
-            ))
-        })
-        .collect::<Result<_>>()?;
-    bar.finish_and_clear();
     let mut timings = StageTimings::default();
-    let mut frames = Vec::with_capacity(results.len());
-    for (out, t) in results {
+    let mut score = RunScore::default();
+    let mut second_returns = 0;
+    sink.begin(&[])?;
+    let work = |k: usize, frame: &Frame| {
+        check_points(sequence, k, frame)?;
+        let (scan, detection, mut t) =
+            organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
+        let start = Instant::now();
+        let decisions = classifier.classify(&FrameInput {
+            beam_hits: None,
+            frame,
+            scan: &scan,
+            sensor: &sensor,
+            detection: &detection,
+            pose: nalgebra::Isometry3::identity(),
+            map_planes: &[],
+            support: None,
+            space: None,
+        });
+        t.add("classify", start.elapsed());
+        let output = FrameOutput {
+            name: frame.name.clone(),
+            classes: decisions.classes,
+            rules: decisions.rules,
+            planes: detection.planes.len(),
+            candidates: detection.candidates.len(),
+        };
+        Ok((output, t, frame.second_returns()))
+    };
+    let reading = sequence.stream_all("classify", work, |k, frame, (output, t, seconds)| {
         timings.merge(&t);
-        frames.push(out);
-    }
+        second_returns += seconds;
+        score.add(frame, &output);
+        let pose = sequence.poses.as_ref().map(|p| &p[k]);
+        sink.frame(k, frame, pose, output)
+    })?;
+    timings.add("parse", reading);
+    check_dual_returns(sequence, second_returns, config)?;
+    timings.frames = sequence.len();
     timings.wall = wall.elapsed();
-    Ok(RunOutput { frames, timings })
+    Ok(score.finish(Vec::new(), timings))
 }

@@ -13,11 +13,11 @@
 use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
-use rayon::prelude::*;
 
+use super::plane_optimized::run_plane_optimized_into;
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
-use super::single_scan::{check_frame, organize_and_detect};
-use super::{run_plane_optimized, PlaneOptimizedOutput, Sequence, StageTimings};
+use super::single_scan::{check_dual_returns, check_points, organize_and_detect};
+use super::{FrameSink, PlaneOptimizedOutput, Sequence, StageTimings};
 use crate::backend::{backend, BackendParams, FactorGraph, SolveReport};
 use crate::cloud::Frame;
 use crate::config::Config;
@@ -104,33 +104,8 @@ pub fn track_sequence(
 ) -> Result<Tracked> {
     let wall = Instant::now();
     let sensor = SensorModel::resolve(&config.sensor)?;
-    for i in 0..sequence.len() {
-        check_frame(sequence, i, config)?;
-    }
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
-
-    // 1. Front end, in parallel.
-    let bar = crate::progress::bar(sequence.len(), "planes");
-    let front: Vec<(Vec<FramePlane>, StageTimings)> = sequence
-        .frames
-        .par_iter()
-        .map(|f| {
-            let out = frame_planes(
-                f,
-                &sensor,
-                detector.as_ref(),
-                extractor.as_ref(),
-                &config.extractor,
-                config.seed,
-            );
-            bar.inc(1);
-            out
-        })
-        .collect::<Result<_>>()?;
-    bar.finish_and_clear();
-
-    // 2. Tracking, in order.
     let mut timings = StageTimings::default();
     let mut tracker = Tracker::new(
         config.slam,
@@ -142,23 +117,40 @@ pub fn track_sequence(
         backend(config.backend.name, &config.backend)?,
         config.backend,
     );
-    let mut poses = Vec::with_capacity(sequence.len());
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
-    let bar = crate::progress::bar(sequence.len(), "track");
-    for (k, (planes, t)) in front.into_iter().enumerate() {
-        timings.merge(&t);
-        let start = Instant::now();
-        let seed = frame_seed(config.seed ^ 0x51a4, &sequence.frames[k].name);
-        let report = tracker.track(planes, seed);
-        let track = start.elapsed();
-        timings.add("track", track);
-        frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);
-        poses.push(report.pose);
-        reports.push(report);
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+    let mut second_returns = 0;
+    // 1. The front end, a window of frames at a time in parallel (it does
+    // not depend on the pose), then 2. tracking of the window in order:
+    // only a frame's planes outlive its window.
+    let reading = sequence.stream_all(
+        "track",
+        |k, frame| {
+            check_points(sequence, k, frame)?;
+            frame_planes(
+                frame,
+                &sensor,
+                detector.as_ref(),
+                extractor.as_ref(),
+                &config.extractor,
+                config.seed,
+            )
+        },
+        |_, frame, (planes, t)| {
+            timings.merge(&t);
+            second_returns += frame.second_returns();
+            let start = Instant::now();
+            let seed = frame_seed(config.seed ^ 0x51a4, &frame.name);
+            let report = tracker.track(planes, seed);
+            let track = start.elapsed();
+            timings.add("track", track);
+            frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);
+            reports.push(report);
+            Ok(())
+        },
+    )?;
+    timings.add_reading(reading);
+    check_dual_returns(sequence, second_returns, config)?;
     tracing::info!(
         frames = reports.len(),
         landmarks = tracker.map().landmarks.len(),
@@ -250,14 +242,15 @@ pub fn optimize_batch(
 
 /// Classify every frame with the plane-optimized pipeline using `poses`
 /// (e.g. the SLAM estimate) instead of the sequence's own poses, which are
-/// restored afterwards.
+/// restored afterwards; every frame's classes go to `sink`.
 pub fn classify_with_poses(
     sequence: &mut Sequence,
     poses: Vec<Isometry3<f64>>,
     config: &Config,
+    sink: &mut dyn FrameSink,
 ) -> Result<PlaneOptimizedOutput> {
     let saved = sequence.poses.replace(poses);
-    let out = run_plane_optimized(sequence, config);
+    let out = run_plane_optimized_into(sequence, config, sink);
     sequence.poses = saved;
     out
 }

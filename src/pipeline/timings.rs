@@ -23,6 +23,14 @@ impl StageTimings {
         }
     }
 
+    /// Add the time spent reading frames from their files (stage
+    /// "parse"), when there was any: frames held in memory take none.
+    pub fn add_reading(&mut self, d: Duration) {
+        if !d.is_zero() {
+            self.add("parse", d);
+        }
+    }
+
     /// Merge another set of timings (stages added, frames summed, wall kept).
     pub fn merge(&mut self, other: &StageTimings) {
         for (n, d) in &other.stages {

@@ -55,7 +55,7 @@ pub fn draw(
         .collect();
     let z0 = heights.iter().sum::<f64>() / heights.len().max(1) as f64;
     let in_slab = |p: &MapPoint| (f64::from(p.xyz[2]) - z0).abs() < SLAB;
-    let before: Vec<MapPoint> = measured_map(sequence, &classes, voxel)
+    let before: Vec<MapPoint> = measured_map(sequence, &classes, voxel)?
         .into_iter()
         .filter(in_slab)
         .collect();
@@ -65,7 +65,7 @@ pub fn draw(
         &po.planes,
         config.plane_map.hull_margin,
         voxel,
-    )
+    )?
     .into_iter()
     .filter(in_slab)
     .collect();

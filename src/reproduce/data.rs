@@ -179,22 +179,22 @@ impl Dataset {
     }
 
     /// Its size and label counts.
-    pub fn info(&self) -> DatasetInfo {
-        let counts = self
-            .sequence
-            .frames
-            .iter()
-            .fold(LabelCounts::default(), |acc, f| {
-                acc.merge(LabelCounts::of(f))
-            });
-        DatasetInfo {
+    pub fn info(&self) -> Result<DatasetInfo> {
+        let mut counts = LabelCounts::default();
+        let mut labelled = true;
+        for k in 0..self.sequence.len() {
+            let frame = self.sequence.frame(k)?;
+            counts = counts.merge(LabelCounts::of(&frame));
+            labelled &= frame.has_labels;
+        }
+        Ok(DatasetInfo {
             name: self.name.clone(),
             kind: self.kind,
             frames: self.sequence.len(),
             points: counts.points,
             by_label: counts.by_label,
-            labelled: self.sequence.frames.iter().all(|f| f.has_labels),
-        }
+            labelled,
+        })
     }
 }
 

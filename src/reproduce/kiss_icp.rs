@@ -191,20 +191,17 @@ pub fn export_scans(dir: &Path, sequence: &Sequence) -> Result<()> {
     if dir.exists() {
         std::fs::remove_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
-    sequence
-        .frames
-        .par_iter()
-        .enumerate()
-        .try_for_each(|(k, frame)| {
-            write_atomic(&dir.join(format!("{k:06}.bin")), |w| {
-                for p in frame.points.iter().filter(|p| p.ret == 1) {
-                    for v in [p.xyz[0], p.xyz[1], p.xyz[2], p.intensity] {
-                        w.write_all(&v.to_le_bytes())?;
-                    }
+    (0..sequence.len()).into_par_iter().try_for_each(|k| {
+        let frame = sequence.frame(k)?;
+        write_atomic(&dir.join(format!("{k:06}.bin")), |w| {
+            for p in frame.points.iter().filter(|p| p.ret == 1) {
+                for v in [p.xyz[0], p.xyz[1], p.xyz[2], p.intensity] {
+                    w.write_all(&v.to_le_bytes())?;
                 }
-                Ok(())
-            })
+            }
+            Ok(())
         })
+    })
 }
 
 /// The `*_poses_kitti.txt` file KISS-ICP wrote into `dir`.

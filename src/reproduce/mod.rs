@@ -38,7 +38,7 @@ use crate::eval::{trajectory_error, Metrics, TrajectoryError};
 use crate::io::write_atomic;
 use crate::pipeline::slam::classify_with_poses;
 use crate::pipeline::{
-    optimize_tracked, run_plane_optimized, run_single_scan, run_slam, track_sequence,
+    optimize_tracked, run_plane_optimized, run_single_scan, run_slam, track_sequence, Discard,
 };
 use crate::{Error, Result};
 
@@ -196,7 +196,7 @@ pub fn run(options: &Options, out: &Path, log: &mut dyn FnMut(&str)) -> Result<R
             dataset.name,
             dataset.sequence.len()
         ));
-        results.datasets.push(dataset.info());
+        results.datasets.push(dataset.info()?);
         run_dataset(&mut dataset, kiss.as_ref(), out, &mut results, log)?;
         log(&format!(
             "{}: done in {:.1} s",
@@ -277,7 +277,7 @@ fn classify_dataset(
                 (po.run.clone(), Some(po))
             }
         };
-        let metrics = run.confusion(seq).map(|c| c.metrics());
+        let metrics = run.confusion.map(|c| c.metrics());
         log(&format!(
             "{}: {name}: {}",
             dataset.name,
@@ -330,11 +330,13 @@ fn slam_dataset(
         };
         let trajectory = trajectory_error(&slam.poses, &truth, config.slam.rpe_segment)?;
         // The sequence's true poses are restored afterwards.
-        let classified = classify_with_poses(&mut dataset.sequence, slam.poses.clone(), &config)?;
-        let metrics = classified
-            .run
-            .confusion(&dataset.sequence)
-            .map(|c| c.metrics());
+        let classified = classify_with_poses(
+            &mut dataset.sequence,
+            slam.poses.clone(),
+            &config,
+            &mut Discard,
+        )?;
+        let metrics = classified.run.confusion.map(|c| c.metrics());
         log(&format!(
             "{}: Reflection SLAM [{backend}]: ATE {:.3} m; {}",
             dataset.name,

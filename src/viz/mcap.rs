@@ -15,17 +15,19 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use foxglove::messages::{
     line_primitive, packed_element_field::NumericType, Color, FrameTransform, LinePrimitive,
     PackedElementField, Point3 as FgPoint3, PointCloud, Pose, PosesInFrame, Quaternion,
     SceneEntity, SceneUpdate, Timestamp, TriangleListPrimitive, Vector3,
 };
-use foxglove::{ChannelBuilder, Context, McapWriter};
+use foxglove::{Channel, ChannelBuilder, Context, McapWriter, McapWriterHandle};
 use nalgebra::{Isometry3, Point3};
 
 use crate::classify::mirror::mirror_reflections;
 use crate::classify::{Class, Rule};
+use crate::cloud::Frame;
 use crate::pipeline::Sequence;
 use crate::reflect::{planes_seen_from, BoundedPlane};
 use crate::{Error, Result};
@@ -83,59 +85,89 @@ pub fn write_run_mcap(path: &Path, run: &McapRun<'_>) -> Result<McapSummary> {
             poses.len()
         )));
     }
-    let tmp = tmp_path(path);
-    let result = write_to(&tmp, run, poses);
-    match result {
-        Ok(summary) => {
-            std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))?;
-            Ok(summary)
-        }
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
+    let mut recorder = McapRecorder::create(path, run.planes, run.hull_margin)?;
+    for (k, pose) in poses.iter().enumerate() {
+        let rules = run.rules.get(k).map_or(&[][..], |r| r.as_slice());
+        let frame = run.sequence.frame(k)?;
+        recorder.add(&frame, pose, &run.classes[k], rules)?;
     }
+    recorder.finish()
 }
 
-fn tmp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".tmp");
-    path.with_file_name(name)
+/// A recording written a frame at a time (to a temporary file beside
+/// `path`, renamed into place by [`finish`](Self::finish) and removed when
+/// the recorder is dropped unfinished), so a long run is recorded without
+/// holding its frames.
+pub struct McapRecorder {
+    path: PathBuf,
+    tmp: PathBuf,
+    writer: Option<McapWriterHandle<BufWriter<File>>>,
+    _context: Arc<Context>,
+    cloud: Channel<PointCloud>,
+    mirrored: Channel<PointCloud>,
+    planes_channel: Channel<SceneUpdate>,
+    tf: Channel<FrameTransform>,
+    trajectory: Channel<PosesInFrame>,
+    planes: Vec<BoundedPlane>,
+    scene: SceneUpdate,
+    hull_margin: f64,
+    trail: Trail,
+    summary: McapSummary,
 }
 
-fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<McapSummary> {
-    let fox = |e: foxglove::FoxgloveError| Error::Input(format!("{}: MCAP: {e}", path.display()));
-    let file = File::create(path).map_err(|e| Error::io(path, e))?;
-    let ctx = Context::new();
-    let writer = McapWriter::new()
-        .context(&ctx)
-        .create(BufWriter::new(file))
-        .map_err(fox)?;
-    let cloud = ChannelBuilder::new("/cloud")
-        .context(&ctx)
-        .build::<PointCloud>();
-    let mirrored = ChannelBuilder::new("/mirrored")
-        .context(&ctx)
-        .build::<PointCloud>();
-    let planes = ChannelBuilder::new("/planes")
-        .context(&ctx)
-        .build::<SceneUpdate>();
-    let tf = ChannelBuilder::new("/tf")
-        .context(&ctx)
-        .build::<FrameTransform>();
-    let trajectory = ChannelBuilder::new("/trajectory")
-        .context(&ctx)
-        .build::<PosesInFrame>();
+impl McapRecorder {
+    /// Start a recording at `path` against the reflective `planes` (world
+    /// frame); `hull_margin` is used to mirror reflections back.
+    pub fn create(path: &Path, planes: &[BoundedPlane], hull_margin: f64) -> Result<Self> {
+        let tmp = tmp_path(path);
+        let fox =
+            |e: foxglove::FoxgloveError| Error::Input(format!("{}: MCAP: {e}", tmp.display()));
+        let file = File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        let ctx = Context::new();
+        let writer = McapWriter::new()
+            .context(&ctx)
+            .create(BufWriter::new(file))
+            .map_err(fox)?;
+        let channel = |topic: &str| ChannelBuilder::new(topic).context(&ctx);
+        Ok(Self {
+            path: path.to_path_buf(),
+            tmp: tmp.clone(),
+            writer: Some(writer),
+            cloud: channel("/cloud").build::<PointCloud>(),
+            mirrored: channel("/mirrored").build::<PointCloud>(),
+            planes_channel: channel("/planes").build::<SceneUpdate>(),
+            tf: channel("/tf").build::<FrameTransform>(),
+            trajectory: channel("/trajectory").build::<PosesInFrame>(),
+            _context: ctx,
+            planes: planes.to_vec(),
+            scene: scene_update(planes),
+            hull_margin,
+            trail: Trail::default(),
+            summary: McapSummary::default(),
+        })
+    }
 
-    let scene = scene_update(run.planes);
-    let mut summary = McapSummary::default();
-    let mut path_poses = Vec::with_capacity(poses.len());
-    for (k, frame) in run.sequence.frames.iter().enumerate() {
-        let pose = poses[k];
+    /// Record one frame with its pose (`T_world_sensor`), classes and the
+    /// rules that decided them (empty where unknown).
+    pub fn add(
+        &mut self,
+        frame: &Frame,
+        pose: &Isometry3<f64>,
+        classes: &[Class],
+        rules: &[Rule],
+    ) -> Result<()> {
+        if classes.len() != frame.points.len() {
+            return Err(Error::Input(format!(
+                "{}: frame {} has {} points but {} classes",
+                self.path.display(),
+                frame.name,
+                frame.points.len(),
+                classes.len()
+            )));
+        }
+        let pose = *pose;
         let stamp = Timestamp::saturating_from_epoch_secs_f64(frame.stamp);
         let t = stamp.total_nanos();
-        let classes = &run.classes[k];
-        let rules = run.rules.get(k).map_or(&[][..], |r| r.as_slice());
 
         // Classified cloud, world frame.
         let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
@@ -145,29 +177,31 @@ fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<
             data.extend_from_slice(&pt.intensity.to_le_bytes());
             data.push(rules.get(i).map_or(0, |r| r.id()));
         }
-        summary.cloud_points += frame.points.len();
-        cloud.log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
+        self.summary.cloud_points += frame.points.len();
+        self.cloud
+            .log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
 
         // Reflections mirrored back (through the planes seen from this pose).
-        let local = planes_seen_from(&run.planes, &pose);
-        let back = mirror_reflections(frame, classes, &local, run.hull_margin);
+        let local = planes_seen_from(&self.planes, &pose);
+        let back = mirror_reflections(frame, classes, &local, self.hull_margin);
         let mut data = Vec::with_capacity(back.len() * MIRRORED_STRIDE as usize);
         for (_, q) in &back {
             push_xyz(&mut data, &(pose * q));
             data.push(Class::Reflection.id());
         }
-        summary.mirrored_points += back.len();
-        mirrored.log_with_time(&point_cloud(stamp, data, MIRRORED_STRIDE, false), t);
+        self.summary.mirrored_points += back.len();
+        self.mirrored
+            .log_with_time(&point_cloud(stamp, data, MIRRORED_STRIDE, false), t);
 
         // Planes (re-sent every frame so seeking always shows them).
-        let mut update = scene.clone();
+        let mut update = self.scene.clone();
         for e in &mut update.entities {
             e.timestamp = Some(stamp);
         }
-        planes.log_with_time(&update, t);
+        self.planes_channel.log_with_time(&update, t);
 
         // Sensor pose and trajectory.
-        tf.log_with_time(
+        self.tf.log_with_time(
             &FrameTransform {
                 timestamp: Some(stamp),
                 parent_frame_id: WORLD_FRAME.into(),
@@ -177,19 +211,94 @@ fn write_to(path: &Path, run: &McapRun<'_>, poses: &[Isometry3<f64>]) -> Result<
             },
             t,
         );
-        path_poses.push(to_pose(&pose));
-        trajectory.log_with_time(
+        self.trail.push(to_pose(&pose));
+        self.trajectory.log_with_time(
             &PosesInFrame {
                 timestamp: Some(stamp),
                 frame_id: WORLD_FRAME.into(),
-                poses: path_poses.clone(),
+                poses: self.trail.poses(),
             },
             t,
         );
-        summary.frames += 1;
+        self.summary.frames += 1;
+        Ok(())
     }
-    writer.close().map_err(fox)?;
-    Ok(summary)
+
+    /// Close the recording and move it into place.
+    pub fn finish(mut self) -> Result<McapSummary> {
+        let writer = self
+            .writer
+            .take()
+            .expect("an unfinished recorder has its writer");
+        writer
+            .close()
+            .map_err(|e| Error::Input(format!("{}: MCAP: {e}", self.tmp.display())))?;
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
+        Ok(self.summary)
+    }
+}
+
+impl Drop for McapRecorder {
+    /// An unfinished recording leaves no file behind.
+    fn drop(&mut self) {
+        if let Some(writer) = self.writer.take() {
+            let _ = writer.close();
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+/// The sensor path shown on `/trajectory`: every pose up to
+/// [`Trail::MAX`], then every second, fourth, ... pose, so each message
+/// stays bounded on long runs (the recording grew with the square of the
+/// frames otherwise).
+#[derive(Debug, Default)]
+struct Trail {
+    kept: Vec<Pose>,
+    /// Poses seen; one in `stride` is kept.
+    seen: usize,
+    stride: usize,
+    /// The latest pose, always shown.
+    last: Option<Pose>,
+}
+
+impl Trail {
+    const MAX: usize = 2000;
+
+    fn push(&mut self, pose: Pose) {
+        let stride = self.stride.max(1);
+        if self.seen % stride == 0 {
+            self.kept.push(pose.clone());
+            if self.kept.len() >= Self::MAX {
+                // Keep every second pose and halve the rate from now on.
+                let mut i = 0;
+                self.kept.retain(|_| {
+                    i += 1;
+                    i % 2 == 1
+                });
+                self.stride = stride * 2;
+            }
+        }
+        self.seen += 1;
+        self.last = Some(pose);
+    }
+
+    /// The poses to show: the kept ones and the latest.
+    fn poses(&self) -> Vec<Pose> {
+        let mut poses = self.kept.clone();
+        if let Some(last) = &self.last {
+            if poses.last() != Some(last) {
+                poses.push(last.clone());
+            }
+        }
+        poses
+    }
+}
+
+fn tmp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".tmp");
+    path.with_file_name(name)
 }
 
 fn push_xyz(buf: &mut Vec<u8>, p: &Point3<f64>) {

@@ -12,4 +12,4 @@ pub mod mcap;
 pub mod plots;
 pub mod report;
 
-pub use self::mcap::{write_run_mcap, McapRun};
+pub use self::mcap::{write_run_mcap, McapRecorder, McapRun, McapSummary};

@@ -1,0 +1,212 @@
+//! Writing a run's outputs as its frames are classified, so a sequence of
+//! any length is written without holding its classes: predictions, the
+//! world maps and the recording grow a frame at a time; the summaries
+//! (metrics, planes, report) are written when the run has succeeded.
+//!
+//! Nothing is left behind by a run that fails: predictions go to
+//! `predictions.partial/` and replace `predictions/` only at the end, the
+//! recording to `run.mcap.tmp`, and both are removed on error.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use nalgebra::Isometry3;
+use specular::cloud::Frame;
+use specular::config::Config;
+use specular::io::{self, MapPoint};
+use specular::pipeline::plane_optimized::{AroundCornerMap, MeasuredMap};
+use specular::pipeline::{FrameOutput, FrameSink, PlaneOptimizedOutput, RunOutput};
+use specular::reflect::BoundedPlane;
+use specular::viz::{McapRecorder, McapSummary};
+
+/// Which outputs a run writes besides predictions and scores.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct OutputOptions {
+    /// The around-the-corner map (methods with a plane map).
+    pub around_corner: bool,
+    /// The outputs for people: `map.ply`, plots, report (and `run.mcap`
+    /// when `mcap`).
+    pub visual: bool,
+    /// `run.mcap` (with `visual`).
+    pub mcap: bool,
+}
+
+/// The [`FrameSink`] of the command-line tool: writes each frame's
+/// predictions and adds it to the maps and the recording.
+pub(crate) struct RunWriter {
+    out: PathBuf,
+    partial: PathBuf,
+    created_out: bool,
+    config: Config,
+    options: OutputOptions,
+    around: Option<AroundCornerMap>,
+    measured: Option<MeasuredMap>,
+    recorder: Option<McapRecorder>,
+    trajectory: Vec<[f64; 2]>,
+    finished: bool,
+}
+
+/// What the frame-by-frame outputs came to, for the summaries.
+pub(crate) struct WrittenFrames {
+    /// The around-the-corner map, when built.
+    pub around_corner: Option<Vec<MapPoint>>,
+    /// The classified map as measured, when built.
+    pub measured: Option<Vec<MapPoint>>,
+    /// The recording, when written.
+    pub mcap: Option<McapSummary>,
+    /// The sensor path (x, y), when the frames had poses.
+    pub trajectory: Vec<[f64; 2]>,
+}
+
+impl RunWriter {
+    /// A writer into `out` (created when missing).
+    pub(crate) fn new(out: &Path, config: &Config, options: OutputOptions) -> Result<Self> {
+        let created_out = !out.exists();
+        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+        let partial = out.join("predictions.partial");
+        if partial.exists() {
+            std::fs::remove_dir_all(&partial)
+                .with_context(|| format!("removing {}", partial.display()))?;
+        }
+        Ok(Self {
+            out: out.to_path_buf(),
+            partial,
+            created_out,
+            config: config.clone(),
+            options,
+            around: None,
+            measured: None,
+            recorder: None,
+            trajectory: Vec::new(),
+            finished: false,
+        })
+    }
+
+    /// Move the predictions into place and close the maps and the
+    /// recording.
+    pub(crate) fn finish(mut self) -> Result<WrittenFrames> {
+        let predictions = self.out.join("predictions");
+        if predictions.exists() {
+            std::fs::remove_dir_all(&predictions)
+                .with_context(|| format!("removing the old {}", predictions.display()))?;
+        }
+        if self.partial.exists() {
+            std::fs::rename(&self.partial, &predictions)
+                .with_context(|| format!("moving predictions into {}", predictions.display()))?;
+        }
+        let mcap = match self.recorder.take() {
+            Some(r) => Some(r.finish()?),
+            None => None,
+        };
+        self.finished = true;
+        Ok(WrittenFrames {
+            around_corner: self.around.take().map(AroundCornerMap::into_points),
+            measured: self.measured.take().map(MeasuredMap::into_points),
+            mcap,
+            trajectory: std::mem::take(&mut self.trajectory),
+        })
+    }
+}
+
+impl FrameSink for RunWriter {
+    fn begin(&mut self, planes: &[BoundedPlane]) -> specular::Result<()> {
+        let voxel = self.config.output.map_voxel;
+        let margin = self.config.plane_map.hull_margin;
+        if self.options.around_corner {
+            self.around = Some(AroundCornerMap::new(planes, margin, voxel));
+        }
+        if self.options.visual {
+            self.measured = Some(MeasuredMap::new(voxel));
+            if self.options.mcap {
+                self.recorder = Some(McapRecorder::create(
+                    &self.out.join("run.mcap"),
+                    planes,
+                    margin,
+                )?);
+            }
+        }
+        std::fs::create_dir_all(&self.partial).map_err(|e| specular::Error::io(&self.partial, e))
+    }
+
+    fn frame(
+        &mut self,
+        _index: usize,
+        frame: &Frame,
+        pose: Option<&Isometry3<f64>>,
+        output: FrameOutput,
+    ) -> specular::Result<()> {
+        let ids: Vec<u8> = output.classes.iter().map(|c| c.id()).collect();
+        io::write_labels(&self.partial.join(format!("{}.label", output.name)), &ids)?;
+        if let Some(pose) = pose {
+            self.trajectory
+                .push([pose.translation.vector.x, pose.translation.vector.y]);
+            if let Some(map) = &mut self.around {
+                map.add(frame, pose, &output.classes);
+            }
+            if let Some(map) = &mut self.measured {
+                map.add(frame, pose, &output.classes);
+            }
+            if let Some(recorder) = &mut self.recorder {
+                recorder.add(frame, pose, &output.classes, &output.rules)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for RunWriter {
+    /// A run that did not finish leaves no predictions (the recorder
+    /// removes its own temporary file), and no directory it created.
+    fn drop(&mut self) {
+        if !self.finished {
+            self.recorder = None;
+            let _ = std::fs::remove_dir_all(&self.partial);
+            if self.created_out {
+                let _ = std::fs::remove_dir(&self.out);
+            }
+        }
+    }
+}
+
+/// Write the summaries of a finished run into `out`: the configuration,
+/// the metrics (when labelled) with the rule tally, and, with a plane map,
+/// `planes.json` and `around_corner.ply`.
+pub(crate) fn write_summaries(
+    out: &Path,
+    config: &Config,
+    names: &[String],
+    run: &RunOutput,
+    map: Option<&PlaneOptimizedOutput>,
+    written: &WrittenFrames,
+) -> Result<()> {
+    io::write_atomic(&out.join("config.toml"), |w| {
+        std::io::Write::write_all(w, config.to_toml().as_bytes())
+    })?;
+    if let Some(map) = map {
+        let records: Vec<_> = map
+            .used
+            .iter()
+            .zip(&map.planes)
+            .map(|(&i, bp)| map.map.landmarks[i].record(bp, names))
+            .collect();
+        io::write_planes(&out.join("planes.json"), &records)?;
+    }
+    if let Some(points) = &written.around_corner {
+        io::write_map_ply(&out.join("around_corner.ply"), points)?;
+    }
+    if let Some(conf) = &run.confusion {
+        // The scores, and which rule decided how many points of each label.
+        let mut value = serde_json::to_value(conf.metrics()).context("serialising metrics")?;
+        if let Some(obj) = value.as_object_mut() {
+            obj.insert(
+                "rules".into(),
+                serde_json::to_value(run.rules).context("serialising rules")?,
+            );
+        }
+        let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;
+        io::write_atomic(&out.join("metrics.json"), |w| {
+            std::io::Write::write_all(w, json.as_bytes())
+        })?;
+    }
+    Ok(())
+}
