@@ -358,3 +358,44 @@ fn vote_frame(
     }
     votes
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The median of the whole multiset, as the in-memory gathering took it.
+    fn median_of_all(v: &mut [f32]) -> Option<f64> {
+        if v.is_empty() {
+            return None;
+        }
+        let mid = v.len() / 2;
+        v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+        Some(v[mid] as f64)
+    }
+
+    proptest! {
+        /// Counting intensities per distinct value gives exactly the median
+        /// of all of them, for whole-number and fractional intensities.
+        #[test]
+        fn counted_median_is_the_median_of_all(
+            whole in proptest::collection::vec(0u8..=255, 0..300),
+            fractional in proptest::collection::vec(-5.0f32..300.0, 0..50),
+        ) {
+            let mut all: Vec<f32> = whole.iter().map(|&x| x as f32).collect();
+            all.extend(&fractional);
+            let mut counts = IntensityCounts::default();
+            for &x in &all {
+                counts.add(x);
+            }
+            prop_assert_eq!(counts.median(), median_of_all(&mut all));
+        }
+
+        /// The order key sorts like `f32::total_cmp` and round-trips.
+        #[test]
+        fn order_key_sorts_like_total_cmp(a in any::<f32>(), b in any::<f32>()) {
+            prop_assert_eq!(total_order_key(a).cmp(&total_order_key(b)), a.total_cmp(&b));
+            prop_assert_eq!(from_total_order_key(total_order_key(a)).to_bits(), a.to_bits());
+        }
+    }
+}

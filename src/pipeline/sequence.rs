@@ -224,3 +224,63 @@ impl Sequence {
         self.stream(&all, stage, work, consume)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::Point;
+    use crate::io::PlyEncoding;
+
+    /// A pass hands every frame on in the order asked for, whatever the
+    /// windows and threads, and the first bad frame ends it with its name.
+    #[test]
+    fn a_pass_is_in_order_and_stops_at_a_bad_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let n = 2 * stream_window() + 3;
+        for k in 0..n {
+            let frame = Frame {
+                name: format!("{}.000000", 100 + k),
+                stamp: (100 + k) as f64,
+                points: vec![
+                    Point {
+                        xyz: [k as f32 + 1.0, 0.0, 0.0],
+                        ret: 1,
+                        ..Default::default()
+                    };
+                    k + 1
+                ],
+                has_labels: false,
+            };
+            let path = dir.path().join(format!("{}.ply", frame.name));
+            io::write_frame(&path, &frame, PlyEncoding::BinaryLittleEndian).unwrap();
+        }
+        let sequence = Sequence::open(dir.path(), None, 0.0).unwrap();
+        assert_eq!(sequence.len(), n);
+        let every_other: Vec<usize> = (0..n).step_by(2).collect();
+        let mut seen = Vec::new();
+        sequence
+            .stream(
+                &every_other,
+                "test",
+                |k, frame| Ok((k, frame.points.len())),
+                |k, frame, (kk, len)| {
+                    assert_eq!((k, len), (kk, frame.points.len()));
+                    seen.push((k, len));
+                    Ok(())
+                },
+            )
+            .unwrap();
+        let expected: Vec<(usize, usize)> = every_other.iter().map(|&k| (k, k + 1)).collect();
+        assert_eq!(seen, expected);
+
+        // Cut one frame short: the pass stops with its file named.
+        let bad = sequence.path(n - 2).to_path_buf();
+        let bytes = std::fs::read(&bad).unwrap();
+        std::fs::write(&bad, &bytes[..bytes.len() - 5]).unwrap();
+        let err = sequence
+            .stream_all("test", |_, _| Ok(()), |_, _, ()| Ok(()))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(bad.to_str().unwrap()), "{err}");
+    }
+}

@@ -539,6 +539,45 @@ mod tests {
         assert!(topic_counts(&path).values().all(|&c| c == 1));
     }
 
+    /// The trajectory shown stays bounded on long runs, keeps its first
+    /// and latest pose, and is the whole path on short ones.
+    #[test]
+    fn the_trail_is_bounded_and_ends_at_the_latest_pose() {
+        let pose = |k: usize| to_pose(&Isometry3::translation(k as f64, 0.0, 0.0));
+        let mut short = Trail::default();
+        for k in 0..100 {
+            short.push(pose(k));
+        }
+        assert_eq!(short.poses(), (0..100).map(pose).collect::<Vec<_>>());
+        let mut long = Trail::default();
+        for k in 0..20_000 {
+            long.push(pose(k));
+            assert!(long.poses().len() <= Trail::MAX + 1);
+        }
+        let shown = long.poses();
+        assert!(shown.len() >= Trail::MAX / 2, "{}", shown.len());
+        assert_eq!(shown.first(), Some(&pose(0)));
+        assert_eq!(shown.last(), Some(&pose(19_999)));
+    }
+
+    /// A recorder dropped before it finished leaves no file.
+    #[test]
+    fn an_unfinished_recording_leaves_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.mcap");
+        let seq = sequence(1, 3);
+        let mut recorder = McapRecorder::create(&path, &[], 0.0).unwrap();
+        let frame = seq.frame(0).unwrap();
+        recorder
+            .add(&frame, &Isometry3::identity(), &[Class::Normal; 3], &[])
+            .unwrap();
+        assert!(recorder
+            .add(&frame, &Isometry3::identity(), &[Class::Normal; 2], &[])
+            .is_err());
+        drop(recorder);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
     #[test]
     fn mismatched_classes_are_an_error() {
         let dir = tempfile::tempdir().unwrap();
