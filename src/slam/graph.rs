@@ -1,12 +1,15 @@
 //! From a tracking run to a pose-plane factor graph, and back.
 //!
-//! Variables: one pose per frame (the tracked pose as the initial value) and
-//! one plane per surviving landmark (its fused world plane). Factors:
+//! Variables: one pose per keyframe (the tracked pose as the initial value;
+//! every frame is a keyframe unless `[slam] keyframe_move` or
+//! `keyframe_turn_deg` say otherwise) and one plane per surviving landmark
+//! (its fused world plane). Factors:
 //!
-//! - a relative-pose factor between consecutive frames: the frame-to-frame
-//!   registration where it succeeded (independent of the map); where it
-//!   failed, the tracked relative pose with a ten times looser noise, so
-//!   the chain stays connected and the gauge stays the first pose's;
+//! - a relative-pose factor between consecutive keyframes: the frame-to-
+//!   frame registrations between them composed where they succeeded
+//!   (independent of the map); where one failed, the tracked relative pose
+//!   with a ten times looser noise, so the chain stays connected and the
+//!   gauge stays the first pose's;
 //! - one plane factor per logged observation (plane-to-plane or the
 //!   point-to-plane scatter factor, per [`BackendParams::plane_factor`]),
 //!   with the configured robust kernel.
@@ -30,14 +33,18 @@ use crate::Result;
 /// Looser noise of a relative-pose factor taken from tracking itself.
 const FALLBACK_ODOMETRY_SCALE: f64 = 10.0;
 
-/// The graph of a tracking run: poses `0..frames`, planes by landmark id.
-/// Landmarks pruned from `map` and observations of them are left out.
+/// The graph of a tracking run: one pose per keyframe (every frame when
+/// every frame is a keyframe), planes by landmark id. Landmarks pruned from
+/// `map` and observations of them are left out.
 pub fn tracking_graph(
     log: &TrackingLog,
     map: &PlaneMap,
     params: &BackendParams,
 ) -> Result<FactorGraph> {
-    window_graph(log, 0..log.frames.len(), map, params)
+    let keyframes: Vec<usize> = (0..log.frames.len())
+        .filter(|&k| log.frames[k].keyframe)
+        .collect();
+    graph_of(log, &keyframes, map, params)
 }
 
 /// The graph of the frames `frames` of a tracking run (pose ids are frame
@@ -49,15 +56,35 @@ pub fn window_graph(
     map: &PlaneMap,
     params: &BackendParams,
 ) -> Result<FactorGraph> {
-    let frames = frames.start..frames.end.min(log.frames.len());
+    let frames: Vec<usize> = (frames.start..frames.end.min(log.frames.len())).collect();
+    graph_of(log, &frames, map, params)
+}
+
+/// The graph of the poses `frames` (increasing frame indices) of a tracking
+/// run, with the landmarks they observe. Consecutive poses are tied by
+/// their odometry; poses further apart (keyframes) by the odometry of the
+/// frames between them composed, its noise growing with their number.
+fn graph_of(
+    log: &TrackingLog,
+    frames: &[usize],
+    map: &PlaneMap,
+    params: &BackendParams,
+) -> Result<FactorGraph> {
     let mut graph = FactorGraph::new();
-    for k in frames.clone() {
+    let (Some(&first), Some(&last)) = (frames.first(), frames.last()) else {
+        return Ok(graph);
+    };
+    for &k in frames {
         graph.values.poses.insert(k as u32, log.frames[k].pose);
     }
-    // The log is in frame order: the window's observations are one slice.
-    let lo = log.observations.partition_point(|o| o.frame < frames.start);
-    let hi = log.observations.partition_point(|o| o.frame < frames.end);
-    let observations: &[LandmarkObservation] = &log.observations[lo..hi.max(lo)];
+    // The log is in frame order: the observations of the span are one
+    // slice, of which the poses' own are kept.
+    let lo = log.observations.partition_point(|o| o.frame < first);
+    let hi = log.observations.partition_point(|o| o.frame <= last);
+    let observations: Vec<&LandmarkObservation> = log.observations[lo..hi.max(lo)]
+        .iter()
+        .filter(|o| frames.binary_search(&o.frame).is_ok())
+        .collect();
     let seen: BTreeSet<usize> = observations.iter().map(|o| o.landmark).collect();
     let planes: BTreeMap<usize, PlaneVar> = map
         .landmarks
@@ -71,9 +98,9 @@ pub fn window_graph(
     // Landmarks seen before the window carry the evidence of frames the
     // window does not hold: they stay where that evidence put them (a
     // window free to move them would forget it).
-    if frames.start > 0 {
+    if first > 0 {
         for l in map.landmarks.iter().filter(|l| planes.contains_key(&l.id)) {
-            if l.first_frame < frames.start {
+            if l.first_frame < first {
                 graph.fixed.insert(Key::Plane(l.id as u32));
             }
         }
@@ -83,19 +110,26 @@ pub fn window_graph(
         params.odometry_translation_sigma,
         params.odometry_rotation_sigma,
     );
-    for k in frames.start + 1..frames.end {
-        let (measured, info) = match log.frames[k].odometry {
-            Some(rel) => (rel, odometry_info),
-            None => (
-                log.frames[k - 1].pose.inverse() * log.frames[k].pose,
-                odometry_info / FALLBACK_ODOMETRY_SCALE,
-            ),
-        };
+    for pair in frames.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let mut measured = Isometry3::identity();
+        let mut fallback = false;
+        for k in a + 1..=b {
+            measured *= match log.frames[k].odometry {
+                Some(rel) => rel,
+                None => {
+                    fallback = true;
+                    log.frames[k - 1].pose.inverse() * log.frames[k].pose
+                }
+            };
+        }
+        // Independent per-frame noise: the variance grows with the count.
+        let mut info = odometry_info / ((b - a) as f64).sqrt();
+        if fallback {
+            info /= FALLBACK_ODOMETRY_SCALE;
+        }
         graph.add(AnyFactor::Between(Between::new(
-            k as u32 - 1,
-            k as u32,
-            measured,
-            info,
+            a as u32, b as u32, measured, info,
         )));
     }
 
@@ -162,13 +196,21 @@ pub fn diagonal_sqrt_info(translation_sigma: f64, rotation_sigma: f64) -> Matrix
     Matrix6::from_diagonal(&Vector6::new(t, t, t, r, r, r))
 }
 
-/// The optimised poses, in frame order (`fallback` for a frame the values
-/// do not hold).
+/// The optimised poses, in frame order. A frame the values hold takes its
+/// value; any other (a frame between keyframes) keeps its tracked pose
+/// `fallback` relative to the last frame before it that the values hold.
 pub fn optimized_poses(values: &Values, fallback: &[Isometry3<f64>]) -> Vec<Isometry3<f64>> {
+    let mut correction = Isometry3::identity();
     fallback
         .iter()
         .enumerate()
-        .map(|(k, p)| values.poses.get(&(k as u32)).copied().unwrap_or(*p))
+        .map(|(k, p)| match values.poses.get(&(k as u32)) {
+            Some(v) => {
+                correction = v * p.inverse();
+                *v
+            }
+            None => correction * p,
+        })
         .collect()
 }
 
@@ -184,5 +226,85 @@ pub fn update_map(map: &mut PlaneMap, values: &Values) {
             *v = plane.project(v);
         }
         l.plane = plane;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::slam::log::TrackedFrame;
+    use nalgebra::{Translation3, UnitQuaternion, Vector3};
+
+    /// A log of `n` frames moving 0.1 m and turning 1 degree per frame,
+    /// every frame's odometry measured; `keyframes` marks the keyframes.
+    fn log(n: usize, keyframes: &[usize]) -> TrackingLog {
+        let step = Isometry3::from_parts(
+            Translation3::new(0.1, 0.0, 0.0),
+            UnitQuaternion::from_scaled_axis(Vector3::z() * 1f64.to_radians()),
+        );
+        let mut pose = Isometry3::identity();
+        let frames = (0..n)
+            .map(|k| {
+                if k > 0 {
+                    pose *= step;
+                }
+                TrackedFrame {
+                    pose,
+                    odometry: (k > 0).then_some(step),
+                    keyframe: keyframes.contains(&k),
+                }
+            })
+            .collect();
+        TrackingLog {
+            frames,
+            observations: Vec::new(),
+        }
+    }
+
+    /// Keyframes are tied by the odometry between them composed, its noise
+    /// growing with the number of frames composed; with every frame a
+    /// keyframe the graph is the frame-by-frame chain.
+    #[test]
+    fn keyframes_are_tied_by_composed_odometry() {
+        let params = BackendParams::default();
+        let every = tracking_graph(&log(5, &[0, 1, 2, 3, 4]), &PlaneMap::new(), &params).unwrap();
+        assert_eq!(every.values.poses.len(), 5);
+        assert_eq!(every.factors.len(), 4);
+        let l = log(5, &[0, 3, 4]);
+        let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
+        assert_eq!(
+            graph.values.poses.keys().copied().collect::<Vec<_>>(),
+            vec![0, 3, 4]
+        );
+        let AnyFactor::Between(first) = &graph.factors[0].factor else {
+            panic!("a relative-pose factor");
+        };
+        let truth = l.frames[0].pose.inverse() * l.frames[3].pose;
+        assert!((first.measured.translation.vector - truth.translation.vector).norm() < 1e-12);
+        assert!(first.measured.rotation.angle_to(&truth.rotation) < 1e-12);
+        let AnyFactor::Between(second) = &graph.factors[1].factor else {
+            panic!("a relative-pose factor");
+        };
+        let ratio = second.sqrt_info[(0, 0)] / first.sqrt_info[(0, 0)];
+        assert!((ratio - 3f64.sqrt()).abs() < 1e-12, "{ratio}");
+    }
+
+    /// Frames between keyframes follow their keyframe's correction.
+    #[test]
+    fn frames_between_keyframes_move_with_their_keyframe() {
+        let l = log(6, &[0, 3]);
+        let tracked: Vec<Isometry3<f64>> = l.frames.iter().map(|f| f.pose).collect();
+        let shift = Isometry3::translation(0.0, 0.5, 0.0);
+        let mut values = Values::default();
+        values.poses.insert(0, tracked[0]);
+        values.poses.insert(3, shift * tracked[3]);
+        let poses = optimized_poses(&values, &tracked);
+        for k in 0..3 {
+            assert!((poses[k].translation.vector - tracked[k].translation.vector).norm() < 1e-12);
+        }
+        for k in 3..6 {
+            let expected = shift * tracked[k];
+            assert!((poses[k].translation.vector - expected.translation.vector).norm() < 1e-12);
+        }
     }
 }

@@ -19,6 +19,9 @@ pub struct TrackedFrame {
     /// The frame-to-frame registration `T_previous_current`, when it
     /// succeeded (a relative-pose measurement independent of the map).
     pub odometry: Option<Isometry3<f64>>,
+    /// Whether the frame is a keyframe: a pose of the batch back-end's
+    /// graph, with its plane observations logged.
+    pub keyframe: bool,
 }
 
 /// One plane of one frame, associated with a landmark.

@@ -48,6 +48,14 @@ pub struct SlamParams {
     pub window: usize,
     /// The window is optimised after every this many frames.
     pub window_every: usize,
+    /// A frame is a keyframe, kept in the batch back-end's graph with its
+    /// plane observations, when it moved more than this from the last
+    /// keyframe, m; the others are placed relative to their keyframe
+    /// afterwards. With `keyframe_turn_deg` also 0 every frame is a
+    /// keyframe (the graph then grows with every frame).
+    pub keyframe_move: f64,
+    /// ... or turned more than this, degrees.
+    pub keyframe_turn_deg: f64,
 }
 
 impl FrameReport {
@@ -77,6 +85,8 @@ impl Default for SlamParams {
             rpe_segment: 1.0,
             window: 0,
             window_every: 5,
+            keyframe_move: 0.0,
+            keyframe_turn_deg: 0.0,
         }
     }
 }
@@ -129,6 +139,8 @@ pub struct Tracker {
     origin: Isometry3<f64>,
     log: TrackingLog,
     window: Option<(Box<dyn Backend>, BackendParams)>,
+    /// Pose of the last keyframe.
+    last_keyframe: Option<Isometry3<f64>>,
 }
 
 impl Tracker {
@@ -151,6 +163,7 @@ impl Tracker {
             origin,
             log: TrackingLog::default(),
             window: None,
+            last_keyframe: None,
         }
     }
 
@@ -267,23 +280,38 @@ impl Tracker {
 
         // 4. Map update: matched planes fuse into their landmark, the others
         //    go through the merger's own matching (or become landmarks).
+        //    Only keyframes keep their observations for the back-end (all
+        //    frames with a sliding window, which optimises every frame).
+        let keyframe = self.is_keyframe(&pose);
+        let log = keyframe || p.window >= 2;
         for (fp, m) in usable.iter().zip(&matched) {
             let obs = fp.observation(&pose, index);
             let k = match m {
                 Some(j) => self.merger.fuse(&mut self.map, *j, &obs),
                 None => self.merger.merge(&mut self.map, &obs),
             };
-            self.log_observation(index, k, fp);
+            if log {
+                self.log_observation(index, k, fp);
+            }
         }
         if !p.use_reflective {
             for fp in planes.iter().filter(|fp| fp.kind == PlaneKind::Reflective) {
                 let k = self
                     .merger
                     .merge(&mut self.map, &fp.observation(&pose, index));
-                self.log_observation(index, k, fp);
+                if log {
+                    self.log_observation(index, k, fp);
+                }
             }
         }
-        self.log.frames.push(TrackedFrame { pose, odometry });
+        if keyframe {
+            self.last_keyframe = Some(pose);
+        }
+        self.log.frames.push(TrackedFrame {
+            pose,
+            odometry,
+            keyframe,
+        });
         report.pruned = self
             .map
             .prune(index, p.prune_after, p.prune_min_observations);
@@ -341,6 +369,22 @@ impl Tracker {
 
     /// Log that `plane` of frame `frame` was fused into the landmark at
     /// index `k` of the map.
+    /// Whether a frame tracked at `pose` is a keyframe: the first, every
+    /// frame when both keyframe thresholds are 0, else one that moved or
+    /// turned past them from the last keyframe.
+    fn is_keyframe(&self, pose: &Isometry3<f64>) -> bool {
+        let p = &self.params;
+        let Some(last) = &self.last_keyframe else {
+            return true;
+        };
+        if p.keyframe_move <= 0.0 && p.keyframe_turn_deg <= 0.0 {
+            return true;
+        }
+        let rel = last.inverse() * pose;
+        rel.translation.vector.norm() > p.keyframe_move
+            || rel.rotation.angle().to_degrees() > p.keyframe_turn_deg
+    }
+
     fn log_observation(&mut self, frame: usize, k: usize, plane: &FramePlane) {
         if let Some(l) = self.map.landmarks.get(k) {
             self.log
