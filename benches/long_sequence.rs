@@ -87,7 +87,9 @@ fn main() {
     let frames = dir.join("frames");
     let poses = dir.join("poses.txt");
     let config = Config::resolve("default").expect("config");
-    let sequence = Sequence::open(&frames, Some(&poses), 0.01).expect("sequence");
+    let sequence = Sequence::open(&frames, Some(&poses), config.input.pose_tolerance)
+        .expect("sequence")
+        .with_frame_cache(config.input.frame_cache_mb);
     let n = sequence.len();
     let all = rayon::current_num_threads();
     println!(

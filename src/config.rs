@@ -47,12 +47,18 @@ pub struct InputParams {
     /// A frame is matched to the pose with the nearest timestamp, which must
     /// be within this many seconds.
     pub pose_tolerance: f64,
+    /// Frames read from files are kept in memory after their first read,
+    /// up to this many megabytes of points, so later passes over the
+    /// sequence do not parse them again; beyond it frames are re-read at
+    /// every pass (memory stays bounded whatever the sequence length).
+    pub frame_cache_mb: f64,
 }
 
 impl Default for InputParams {
     fn default() -> Self {
         Self {
             pose_tolerance: 0.01,
+            frame_cache_mb: crate::pipeline::sequence::DEFAULT_FRAME_CACHE_MB,
         }
     }
 }

@@ -120,7 +120,8 @@ pub(crate) fn open_frames(
     if config.method == Method::PlaneOptimized && poses.is_none() {
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
-    Ok(Sequence::open(frames, poses, config.input.pose_tolerance)?)
+    Ok(Sequence::open(frames, poses, config.input.pose_tolerance)?
+        .with_frame_cache(config.input.frame_cache_mb))
 }
 
 /// The point clouds on `topic` of a ROS 2 bag as a sequence, with their

@@ -6,10 +6,13 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use serde_json::json;
+use specular::backend::FactorGraph;
 use specular::eval::trajectory_error;
 use specular::io::{self, StampedPose};
 use specular::pipeline::slam::classify_with_poses;
-use specular::pipeline::{run_plane_optimized_into, run_slam, Discard, Sequence};
+use specular::pipeline::{
+    optimize_tracked, run_plane_optimized_into, track_sequence, Discard, Sequence,
+};
 
 use super::load_config;
 use super::output::{OutputOptions, RunWriter};
@@ -64,13 +67,21 @@ pub fn run(args: SlamArgs) -> Result<()> {
         &args.frames,
         gt_poses.as_deref(),
         config.input.pose_tolerance,
-    )?;
+    )?
+    .with_frame_cache(config.input.frame_cache_mb);
     if sequence.is_empty() {
         anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
     }
     let truth = sequence.poses.clone();
     let origin = truth.as_ref().map(|t| t[0]);
-    let slam = run_slam(&sequence, &config, origin)?;
+    let wall = std::time::Instant::now();
+    let tracked = track_sequence(&sequence, &config, origin)?;
+    // The frames kept from tracking are not needed while the back-end
+    // solves (its graph grows with the frames): the classification passes
+    // keep them again, so the peak is the larger of the two, not their sum.
+    sequence = sequence.with_frame_cache(config.input.frame_cache_mb);
+    let mut slam = optimize_tracked(tracked, &config)?;
+    slam.timings.wall = wall.elapsed();
     let out = &args.out;
 
     // Poses, map, per-frame report.
@@ -128,6 +139,9 @@ pub fn run(args: SlamArgs) -> Result<()> {
     if let Some(path) = &args.export_graph {
         slam.graph.write(path)?;
     }
+    // The graph grows with the frames and the classification pass does not
+    // need it.
+    slam.graph = FactorGraph::new();
 
     // Trajectory error, of the back-end's result and of tracking alone.
     let (trajectory, tracking) = match &truth {

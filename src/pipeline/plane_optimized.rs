@@ -23,8 +23,8 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
-use super::registry::{detector, merger, plane_map_classifier};
-use super::single_scan::{check_dual_returns, check_points, organize_and_detect};
+use super::registry::{detector, frame_seed, merger, plane_map_classifier};
+use super::single_scan::{check_dual_returns, check_points};
 use super::{FrameOutput, FrameSink, RunOutput, RunScore, Sequence, StageTimings};
 use crate::classify::boundary::BeamPlanes;
 use crate::classify::mirror::mirror_reflections;
@@ -99,8 +99,13 @@ pub fn run_plane_optimized_into(
         "detect",
         |k, frame| {
             check_points(sequence, k, frame)?;
-            let (_, detection, t) =
-                organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
+            let mut t = StageTimings::default();
+            let start = Instant::now();
+            let scan = sequence.scan(k, frame, &sensor)?;
+            t.add("pair", start.elapsed());
+            let start = Instant::now();
+            let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
+            t.add("detect", start.elapsed());
             let summary = FrameSummary {
                 observations: observations(&detection, &poses[k], k),
                 planes: detection.planes.len(),
@@ -204,7 +209,7 @@ pub fn run_plane_optimized_into(
         |k, frame| {
             let mut t = StageTimings::default();
             let start = Instant::now();
-            let scan = OrganizedScan::build(frame, &sensor)?;
+            let scan = sequence.scan(k, frame, &sensor)?;
             t.add("pair", start.elapsed());
             let start = Instant::now();
             let decisions = classifier.classify(&FrameInput {
@@ -263,7 +268,7 @@ fn gather_evidence(
             |k, frame| {
                 let mut t = StageTimings::default();
                 let start = Instant::now();
-                let scan = OrganizedScan::build(frame, sensor)?;
+                let scan = sequence.scan(k, frame, sensor)?;
                 t.add("pair", start.elapsed());
                 let start = Instant::now();
                 let f = EvidenceFrame {
@@ -389,7 +394,7 @@ impl<'a> FrameViews<'a> {
             stage,
             |k, frame| {
                 let start = Instant::now();
-                let scan = OrganizedScan::build(frame, self.sensor)?;
+                let scan = self.sequence.scan(k, frame, self.sensor)?;
                 let input = self.input(k, frame, &scan, planes);
                 let hits = self.classifier.beam_hits(&input);
                 Ok((work(&input, &hits), start.elapsed()))

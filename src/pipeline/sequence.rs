@@ -10,6 +10,8 @@
 
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
@@ -18,6 +20,7 @@ use rayon::prelude::*;
 use super::StageTimings;
 use crate::cloud::Frame;
 use crate::io::{self, FrameEntry};
+use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
 
 /// Frames of one sequence in timestamp order, with their poses when given.
@@ -32,11 +35,62 @@ pub struct Sequence {
 }
 
 /// Where a sequence's points are: parsed once and held, or read from their
-/// files at every pass.
+/// files, the first ones kept after their first read.
 #[derive(Debug, Clone)]
 enum FrameStore {
     Memory(Vec<Frame>),
-    Files,
+    Files(Arc<FrameCache>),
+}
+
+/// Megabytes of parsed frames a sequence read from files keeps by default
+/// ([`Sequence::with_frame_cache`]).
+pub const DEFAULT_FRAME_CACHE_MB: f64 = 256.0;
+
+/// Frames kept after their first read, up to a budget of bytes: the first
+/// frames of a sequence (passes read in order), so a short sequence is
+/// parsed once and a long one costs no more memory than the budget.
+/// The organized scans of the kept frames are kept too (same budget):
+/// every pass pairs the returns of the frames it reads.
+#[derive(Debug)]
+struct FrameCache {
+    frames: Vec<OnceLock<Frame>>,
+    scans: Vec<OnceLock<OrganizedScan>>,
+    budget: usize,
+    used: AtomicUsize,
+}
+
+impl FrameCache {
+    fn new(frames: usize, budget: usize) -> Self {
+        Self {
+            frames: (0..frames).map(|_| OnceLock::new()).collect(),
+            scans: (0..frames).map(|_| OnceLock::new()).collect(),
+            budget,
+            used: AtomicUsize::new(0),
+        }
+    }
+
+    /// Keep `value` in `cell` if its `bytes` fit the budget; gives it back
+    /// otherwise.
+    fn keep<'a, T>(
+        &self,
+        cell: &'a OnceLock<T>,
+        value: T,
+        bytes: usize,
+    ) -> std::result::Result<&'a T, T> {
+        let before = self.used.fetch_add(bytes, Ordering::Relaxed);
+        if before + bytes > self.budget {
+            self.used.fetch_sub(bytes, Ordering::Relaxed);
+            return Err(value);
+        }
+        match cell.set(value) {
+            Ok(()) => Ok(cell.get().expect("just set")),
+            // Made twice at once: keep the first, count it once.
+            Err(value) => {
+                self.used.fetch_sub(bytes, Ordering::Relaxed);
+                Err(value)
+            }
+        }
+    }
 }
 
 /// Frames handled at once by [`Sequence::stream`]: enough to keep every
@@ -44,6 +98,15 @@ enum FrameStore {
 /// fixed amount of memory.
 pub fn stream_window() -> usize {
     (4 * rayon::current_num_threads()).max(8)
+}
+
+/// Megabytes as bytes (negative and NaN as 0).
+fn megabytes(mb: f64) -> usize {
+    if mb > 0.0 {
+        (mb * 1e6) as usize
+    } else {
+        0
+    }
 }
 
 impl Sequence {
@@ -62,11 +125,24 @@ impl Sequence {
             }
             None => None,
         };
+        let cache = FrameCache::new(entries.len(), megabytes(DEFAULT_FRAME_CACHE_MB));
         Ok(Self {
             entries,
             poses,
-            store: FrameStore::Files,
+            store: FrameStore::Files(Arc::new(cache)),
         })
+    }
+
+    /// Keep at most `megabytes` of parsed frames between passes (0: read
+    /// every frame at every pass). No effect on a sequence held in memory.
+    pub fn with_frame_cache(mut self, megabytes_kept: f64) -> Self {
+        if let FrameStore::Files(_) = self.store {
+            self.store = FrameStore::Files(Arc::new(FrameCache::new(
+                self.entries.len(),
+                megabytes(megabytes_kept),
+            )));
+        }
+        self
     }
 
     /// Like [`open`](Self::open), then parse every frame (in parallel) and
@@ -156,17 +232,61 @@ impl Sequence {
     pub fn in_memory(&self) -> Option<&[Frame]> {
         match &self.store {
             FrameStore::Memory(frames) => Some(frames),
-            FrameStore::Files => None,
+            FrameStore::Files(_) => None,
         }
     }
 
-    /// Frame `index`: lent from memory, or read from its file (the error
-    /// names the file).
+    /// Frame `index`: lent from memory or the cache, or read from its file
+    /// (the error names the file).
     pub fn frame(&self, index: usize) -> Result<Cow<'_, Frame>> {
+        self.fetch(index).map(|(frame, _)| frame)
+    }
+
+    /// Frame `index` and, when it was read from its file, the time that
+    /// took.
+    fn fetch(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
         match &self.store {
-            FrameStore::Memory(frames) => Ok(Cow::Borrowed(&frames[index])),
-            FrameStore::Files => io::read_frame(&self.entries[index].path).map(Cow::Owned),
+            FrameStore::Memory(frames) => Ok((Cow::Borrowed(&frames[index]), None)),
+            FrameStore::Files(cache) => {
+                if let Some(frame) = cache.frames[index].get() {
+                    return Ok((Cow::Borrowed(frame), None));
+                }
+                let start = Instant::now();
+                let frame = io::read_frame(&self.entries[index].path)?;
+                let read = start.elapsed();
+                let bytes = frame.points.len() * std::mem::size_of::<crate::cloud::Point>();
+                let frame = match cache.keep(&cache.frames[index], frame, bytes) {
+                    Ok(kept) => Cow::Borrowed(kept),
+                    Err(frame) => Cow::Owned(frame),
+                };
+                Ok((frame, Some(read)))
+            }
         }
+    }
+
+    /// The organized scan of frame `index` (`frame`, as this sequence gave
+    /// it): kept with the frame when the frame is kept, so later passes do
+    /// not pair its returns again; built otherwise.
+    pub fn scan(
+        &self,
+        index: usize,
+        frame: &Frame,
+        sensor: &SensorModel,
+    ) -> Result<Cow<'_, OrganizedScan>> {
+        let cache = match &self.store {
+            FrameStore::Files(cache) if cache.frames[index].get().is_some() => cache,
+            _ => return OrganizedScan::build(frame, sensor).map(Cow::Owned),
+        };
+        let cell = &cache.scans[index];
+        if let Some(scan) = cell.get() {
+            return Ok(Cow::Borrowed(scan));
+        }
+        let scan = OrganizedScan::build(frame, sensor)?;
+        let bytes = scan.heap_bytes();
+        Ok(match cache.keep(cell, scan, bytes) {
+            Ok(kept) => Cow::Borrowed(kept),
+            Err(scan) => Cow::Owned(scan),
+        })
     }
 
     /// One pass over the frames `indices` (sequence order): `work` runs on
@@ -194,18 +314,14 @@ impl Sequence {
             let results: Vec<(Cow<'_, Frame>, T, Duration)> = window
                 .par_iter()
                 .map(|&k| {
-                    let start = Instant::now();
-                    let frame = self.frame(k)?;
-                    let read = start.elapsed();
+                    let (frame, read) = self.fetch(k)?;
                     let out = work(k, &frame)?;
                     bar.inc(1);
-                    Ok((frame, out, read))
+                    Ok((frame, out, read.unwrap_or_default()))
                 })
                 .collect::<Result<_>>()?;
             for (&k, (frame, out, read)) in window.iter().zip(results) {
-                if let Cow::Owned(_) = frame {
-                    reading += read;
-                }
+                reading += read;
                 consume(k, &frame, out)?;
             }
         }
@@ -254,8 +370,16 @@ mod tests {
             let path = dir.path().join(format!("{}.ply", frame.name));
             io::write_frame(&path, &frame, PlyEncoding::BinaryLittleEndian).unwrap();
         }
-        let sequence = Sequence::open(dir.path(), None, 0.0).unwrap();
+        // Two frames' worth of cache: the first two are kept, the rest read
+        // at every pass.
+        let sequence = Sequence::open(dir.path(), None, 0.0)
+            .unwrap()
+            .with_frame_cache(4e-6 * std::mem::size_of::<Point>() as f64);
         assert_eq!(sequence.len(), n);
+        assert!(matches!(sequence.frame(0).unwrap(), Cow::Borrowed(_)));
+        assert!(matches!(sequence.frame(1).unwrap(), Cow::Borrowed(_)));
+        assert!(matches!(sequence.frame(2).unwrap(), Cow::Owned(_)));
+        assert!(matches!(sequence.frame(5).unwrap(), Cow::Owned(_)));
         let every_other: Vec<usize> = (0..n).step_by(2).collect();
         let mut seen = Vec::new();
         sequence

@@ -25,9 +25,10 @@ use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtra
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
-use crate::slam::graph::{optimized_poses, tracking_graph, update_map};
+use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
 use crate::slam::{FrameReport, Tracker, TrackingLog};
 use crate::Result;
+use rayon::prelude::*;
 
 /// What the SLAM pipeline produces.
 #[derive(Debug, Clone)]
@@ -200,7 +201,10 @@ pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput>
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
     let start = Instant::now();
     let graph = tracking_graph(&log, &map, &config.backend)?;
-    let (optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;
+    let (mut optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;
+    if report.is_some() {
+        place_between_keyframes(&log, &map, &config.backend, &mut optimized)?;
+    }
     timings.add("backend", start.elapsed());
     Ok(SlamOutput {
         poses: optimized,
@@ -238,6 +242,51 @@ pub fn optimize_batch(
     );
     update_map(map, &values);
     Ok((optimized_poses(&values, tracked), Some(report)))
+}
+
+/// After the keyframes and the map are optimised, place the frames between
+/// keyframes (and after the last one): each span is optimised on its own
+/// against the optimised planes, its keyframes held fixed, from the poses
+/// `poses` (tracking re-anchored on the keyframes), which it updates. Does
+/// nothing when every frame is a keyframe.
+pub fn place_between_keyframes(
+    log: &TrackingLog,
+    map: &PlaneMap,
+    params: &BackendParams,
+    poses: &mut [Isometry3<f64>],
+) -> Result<()> {
+    let n = log.frames.len().min(poses.len());
+    let keyframes: Vec<usize> = (0..n).filter(|&k| log.frames[k].keyframe).collect();
+    if keyframes.len() == n {
+        return Ok(());
+    }
+    let mut spans: Vec<(std::ops::Range<usize>, bool)> = keyframes
+        .windows(2)
+        .filter(|w| w[1] > w[0] + 1)
+        .map(|w| (w[0]..w[1] + 1, true))
+        .collect();
+    if let Some(&last) = keyframes.last() {
+        if last + 1 < n {
+            spans.push((last..n, false));
+        }
+    }
+    let initial: &[Isometry3<f64>] = poses;
+    let placed: Vec<Vec<(usize, Isometry3<f64>)>> = spans
+        .par_iter()
+        .map(|(span, closed)| {
+            let graph = segment_graph(log, span.clone(), *closed, initial, map, params)?;
+            let solver = backend(params.name, params)?;
+            let (values, _) = solver.optimize(&graph, &graph.values)?;
+            Ok(span
+                .clone()
+                .filter_map(|k| values.poses.get(&(k as u32)).map(|p| (k, *p)))
+                .collect())
+        })
+        .collect::<Result<_>>()?;
+    for (k, pose) in placed.into_iter().flatten() {
+        poses[k] = pose;
+    }
+    Ok(())
 }
 
 /// Classify every frame with the plane-optimized pipeline using `poses`

@@ -26,6 +26,11 @@ pub struct OrganizedScan {
 }
 
 impl OrganizedScan {
+    /// Bytes the scan holds on the heap (for memory budgets).
+    pub fn heap_bytes(&self) -> usize {
+        4 * (self.first.len() + self.second.len() + self.cell_of_point.len())
+    }
+
     /// Cosine of the angle between point `point`'s beam and the surface it
     /// hit, from its neighbours in the scan (left/right and up/down, the
     /// return of each neighbouring beam nearest in range); `None` where the

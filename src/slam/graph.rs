@@ -47,6 +47,37 @@ pub fn tracking_graph(
     graph_of(log, &keyframes, map, params)
 }
 
+/// The graph of the frames `span` of a tracking run between two
+/// keyframes (or after the last one), for placing the frames between them
+/// once the keyframes and the map are optimised: the initial poses are
+/// `poses`, the first and (when `last_is_keyframe`) last pose are held
+/// fixed, and so is every plane.
+pub fn segment_graph(
+    log: &TrackingLog,
+    span: Range<usize>,
+    last_is_keyframe: bool,
+    poses: &[Isometry3<f64>],
+    map: &PlaneMap,
+    params: &BackendParams,
+) -> Result<FactorGraph> {
+    let frames: Vec<usize> = span.collect();
+    let mut graph = graph_of(log, &frames, map, params)?;
+    for &k in &frames {
+        graph.values.poses.insert(k as u32, poses[k]);
+    }
+    if let (Some(&first), Some(&last)) = (frames.first(), frames.last()) {
+        graph.fixed.insert(Key::Pose(first as u32));
+        if last_is_keyframe {
+            graph.fixed.insert(Key::Pose(last as u32));
+        }
+    }
+    let planes: Vec<u32> = graph.values.planes.keys().copied().collect();
+    for id in planes {
+        graph.fixed.insert(Key::Plane(id));
+    }
+    Ok(graph)
+}
+
 /// The graph of the frames `frames` of a tracking run (pose ids are frame
 /// indices; the window's first pose is the gauge), with the landmarks they
 /// observe.

@@ -280,28 +280,21 @@ impl Tracker {
 
         // 4. Map update: matched planes fuse into their landmark, the others
         //    go through the merger's own matching (or become landmarks).
-        //    Only keyframes keep their observations for the back-end (all
-        //    frames with a sliding window, which optimises every frame).
         let keyframe = self.is_keyframe(&pose);
-        let log = keyframe || p.window >= 2;
         for (fp, m) in usable.iter().zip(&matched) {
             let obs = fp.observation(&pose, index);
             let k = match m {
                 Some(j) => self.merger.fuse(&mut self.map, *j, &obs),
                 None => self.merger.merge(&mut self.map, &obs),
             };
-            if log {
-                self.log_observation(index, k, fp);
-            }
+            self.log_observation(index, k, fp);
         }
         if !p.use_reflective {
             for fp in planes.iter().filter(|fp| fp.kind == PlaneKind::Reflective) {
                 let k = self
                     .merger
                     .merge(&mut self.map, &fp.observation(&pose, index));
-                if log {
-                    self.log_observation(index, k, fp);
-                }
+                self.log_observation(index, k, fp);
             }
         }
         if keyframe {
