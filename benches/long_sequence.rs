@@ -97,7 +97,7 @@ fn main() {
         dir.display()
     );
     println!(
-        "{:<40} {:>12} {:>12}",
+        "{:<46} {:>10} {:>10}",
         "",
         "1 thread",
         format!("{all} threads")
@@ -106,7 +106,7 @@ fn main() {
         run_plane_optimized_into(&sequence, &config, &mut Discard).expect("detect");
     };
     println!(
-        "{:<40} {:>12.1} {:>12.1}",
+        "{:<46} {:>10.1} {:>10.1}",
         "detect (plane-optimized), frames/s",
         fps(1, passes, n, &detect),
         fps(all, passes, n, &detect)
@@ -118,7 +118,7 @@ fn main() {
         classify_with_poses(&mut sequence, out.poses, &config, &mut Discard).expect("classify");
     };
     println!(
-        "{:<40} {:>12.1} {:>12.1}",
+        "{:<46} {:>10.1} {:>10.1}",
         "slam (track + back-end + classify), frames/s",
         fps(1, passes, n, &slam),
         fps(all, passes, n, &slam)

@@ -230,7 +230,10 @@ pub fn run_plane_optimized_into(
                 candidates: summaries[k].candidates,
             };
             score.add(frame, &output);
-            sink.frame(k, frame, Some(&poses[k]), output)
+            let start = Instant::now();
+            sink.frame(k, frame, Some(&poses[k]), output)?;
+            timings.add("write outputs", start.elapsed());
+            Ok(())
         },
     )?;
     timings.add_reading(reading);

@@ -122,9 +122,12 @@ pub fn run_single_scan_into(
         second_returns += seconds;
         score.add(frame, &output);
         let pose = sequence.poses.as_ref().map(|p| &p[k]);
-        sink.frame(k, frame, pose, output)
+        let start = Instant::now();
+        sink.frame(k, frame, pose, output)?;
+        timings.add("write outputs", start.elapsed());
+        Ok(())
     })?;
-    timings.add("parse", reading);
+    timings.add_reading(reading);
     check_dual_returns(sequence, second_returns, config)?;
     timings.frames = sequence.len();
     timings.wall = wall.elapsed();
