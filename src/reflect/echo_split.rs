@@ -45,6 +45,13 @@ pub struct EchoSplitParams {
     /// Points within this many decades of the threshold are left to the
     /// other tests.
     pub band: f64,
+    /// Use a split only when its anchors (transmitted for sure) are the
+    /// stronger group. Glass reflects a few per cent of the power and
+    /// transmits most of it, so reflections are the weaker echoes; a split
+    /// whose anchors fall on the weak side separates something else (dark
+    /// and bright materials, near and far pane sides) and would call the
+    /// bright real surfaces behind the glass reflections.
+    pub reflection_is_weaker: bool,
     /// A landmark is a mirror when at most this share of the points behind
     /// it are anchors (transmitted for sure), over at least
     /// `mirror_min_behind` points: glass transmits, a mirror never does
@@ -64,6 +71,7 @@ impl Default for EchoSplitParams {
             min_anchors: 30,
             min_anchor_agreement: 0.75,
             band: 0.1,
+            reflection_is_weaker: false,
             mirror_max_anchor_share: 0.0,
             mirror_min_behind: 1000,
         }
@@ -204,7 +212,7 @@ impl EchoSplit {
         let strong = anchors.above(threshold) as f64 / n as f64;
         let weak_is_reflection = if strong >= p.min_anchor_agreement {
             true
-        } else if 1.0 - strong >= p.min_anchor_agreement {
+        } else if 1.0 - strong >= p.min_anchor_agreement && !p.reflection_is_weaker {
             false
         } else {
             return None;
@@ -260,9 +268,23 @@ mod tests {
         assert_eq!(split.reflected(100.0, 10.0, 1.0), Some(false));
         // A weak echo from a surface met at grazing incidence is not.
         assert_eq!(split.reflected(5.0, 10.0, 0.1), Some(false));
-        // Anchors on the weak side flip the orientation (strong mirrors).
-        let flipped = EchoSplit::fit(&all, &histogram(weak.iter().take(100).copied()), &p);
+        // Anchors on the weak side flip the orientation (strong mirrors)...
+        let weak_anchors = histogram(weak.iter().take(100).copied());
+        let flipped = EchoSplit::fit(&all, &weak_anchors, &p);
         assert!(!flipped.expect("a split").weak_is_reflection);
+        // ... unless reflections must be the weaker echoes (glass that
+        // transmits more than it reflects): then the split separates
+        // something else and is not used.
+        let glass = EchoSplitParams {
+            reflection_is_weaker: true,
+            ..p
+        };
+        assert!(EchoSplit::fit(&all, &weak_anchors, &glass).is_none());
+        assert!(
+            EchoSplit::fit(&all, &anchors, &glass)
+                .expect("a split")
+                .weak_is_reflection
+        );
         // Too few anchors, or anchors on both sides: no split.
         assert!(EchoSplit::fit(&all, &histogram(strong.iter().take(5).copied()), &p).is_none());
         let mixed = histogram(weak.iter().take(50).chain(strong.iter().take(50)).copied());
