@@ -23,7 +23,7 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
-    let shared = PathBuf::from("/work/shared/data/3dref-seq1-demo");
+    let shared = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/3dref-seq1-demo");
     let bundled = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("datasets/3dref-sample");
     let dir = args
         .first()

@@ -21,7 +21,9 @@ fn main() {
         .find(|a| !a.starts_with('-'))
         .or_else(|| std::env::var("SPECULAR_DATA").ok())
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("/work/shared/data/3dref-seq1-demo"));
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/3dref-seq1-demo")
+        });
     let frames = match list_frames(&dir) {
         Ok(f) => f,
         Err(e) => {

@@ -2,6 +2,8 @@
 //! frames, and one test per kind of bad input (each checking the message and
 //! that it names the file).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -12,19 +14,10 @@ use specular::io::{
     write_frame, write_labels, write_tum, PlyEncoding, StampedPose,
 };
 
-const DEMO: &str = "/work/shared/data/3dref-seq1-demo";
 const DEMO_FRAME: &str = "1689496219.652560.ply";
 
 fn demo_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("SPECULAR_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(DEMO));
-    if dir.join(DEMO_FRAME).is_file() {
-        Some(dir)
-    } else {
-        eprintln!("note: {} absent, skipping this test", dir.display());
-        None
-    }
+    common::shared_frames()
 }
 
 fn sample_frame(has_labels: bool) -> Frame {

@@ -182,3 +182,22 @@ fn backends_are_applied_by_name() {
     let err = with_backend(&config, "no-such-backend").unwrap_err();
     assert!(err.to_string().contains("no-such-backend"), "{err}");
 }
+
+/// Without `--out` a run writes into `runs/reproduce/` of the working
+/// directory, never over the tracked `paper/` tables.
+#[test]
+fn by_default_a_run_writes_a_fresh_directory_not_paper() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_specular"))
+        .current_dir(tmp.path())
+        .args(["reproduce", "--quick"])
+        .output()
+        .expect("run specular");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(tmp
+        .path()
+        .join("runs/reproduce/results/results.json")
+        .is_file());
+    assert!(tmp.path().join("runs/reproduce/README.md").is_file());
+    assert!(!tmp.path().join("paper").exists());
+}

@@ -22,8 +22,10 @@ const README_TEMPLATE: &str = include_str!("../../paper/README.in.md");
 /// Arguments of `reproduce`.
 #[derive(Args, Debug)]
 pub struct ReproduceArgs {
-    /// Output directory of the results (tables, JSON, figures).
-    #[arg(long, default_value = "paper/results")]
+    /// Output directory of the results (tables, JSON, figures); the README
+    /// goes beside it. A fresh directory by default: the tracked
+    /// `paper/results` is refreshed only when named (`--out paper/results`).
+    #[arg(long, default_value = "runs/reproduce/results")]
     pub out: PathBuf,
     /// A further real 3DRef-format directory (`*.ply` frames in `frames/`,
     /// in `raycast/hesai/` as in the 3DRef release's `raw/seqN/`, or
