@@ -248,6 +248,25 @@ impl EvidenceGrid {
             .is_some_and(|th| intensity > th && cos_incidence.abs() < self.peak_cos)
     }
 
+    /// Surface echoes (glass echoes) counted in the cells within `reach`
+    /// metres (a square of cells) of `uv`; 0 outside the grid.
+    pub fn echoes_near(&self, uv: &Point2<f64>, reach: f64) -> u32 {
+        let x = (uv.x - self.min.x) / self.cell;
+        let y = (uv.y - self.min.y) / self.cell;
+        let r = (reach / self.cell).round() as i64;
+        if !(x.is_finite() && y.is_finite()) {
+            return 0;
+        }
+        let (ci, cj) = (x.floor() as i64, y.floor() as i64);
+        let mut total = 0;
+        for j in (cj - r).max(0)..=(cj + r).min(self.rows as i64 - 1) {
+            for i in (ci - r).max(0)..=(ci + r).min(self.cols as i64 - 1) {
+                total += self.echo[j as usize * self.cols + i as usize];
+            }
+        }
+        total
+    }
+
     /// Whether any cell is decided (transparent or opaque).
     pub fn is_decided(&self) -> bool {
         (0..self.cols * self.rows).any(|k| self.cell_state(k) != Surface::Unknown)

@@ -125,6 +125,12 @@ pub struct DecisionParams {
     /// sequence (an occupied voxel of the space map) is real: an Obstacle.
     /// Tested after the echo strength, before the mirror-image support.
     pub seen_surface_test: bool,
+    /// Such a real point is an Obstacle only where the pane produced glass
+    /// echoes within this distance of the beam's crossing (its evidence
+    /// grid); with none there the beam passed an opening in the plane (a
+    /// door, a gap the pane's extent covers) and the point is Normal, m
+    /// (0: always an Obstacle).
+    pub seen_surface_echo_reach: f64,
 }
 
 impl Default for DecisionParams {
@@ -150,6 +156,7 @@ impl Default for DecisionParams {
             space_margin: 0.2,
             space_clearance_ratio: 0.0,
             seen_surface_test: false,
+            seen_surface_echo_reach: 0.0,
         }
     }
 }
@@ -481,7 +488,18 @@ pub fn decide_with_hits(
             && single_pane
             && space.is_some_and(|s| s.occupancy(&p) == Occupancy::Occupied)
         {
-            (classes[i], rules[i]) = (Class::Obstacle, Rule::SeenSurface);
+            // Real: through glass, or through an opening in the plane.
+            let through_glass = params.seen_surface_echo_reach <= 0.0
+                || bp.evidence.as_ref().is_none_or(|e| {
+                    let crossing = Point3::from(p.coords * (t / p.coords.norm()));
+                    e.echoes_near(&bp.chart.to_2d(&crossing), params.seen_surface_echo_reach) > 0
+                });
+            classes[i] = if through_glass {
+                Class::Obstacle
+            } else {
+                Class::Normal
+            };
+            rules[i] = Rule::SeenSurface;
             continue;
         }
         if params.support_test {

@@ -225,6 +225,50 @@ fn a_point_on_a_surface_seen_directly_is_real() {
     assert_eq!(run(false).classes, [Class::Unclassified]);
 }
 
+/// A real point seen through a stretch of the plane where the pane never
+/// gave a glass echo was seen through an opening (a door): Normal with
+/// the echo reach set; an Obstacle where glass echoes are near the
+/// crossing, or with the reach 0.
+#[test]
+fn a_real_point_seen_through_an_opening_is_normal() {
+    use crate::geometry::grid::EvidenceGrid;
+    use nalgebra::Point2;
+    let space = wall_seen_from(Point3::new(7.0, 0.0, 0.0), 8.0);
+    let point = [[8.0f32, 0.1, 0.1]];
+    // The beam crosses the pane at (5, 0.0625, 0.0625).
+    let crossing = Point3::new(5.0, 0.0625, 0.0625);
+    let with_echo_at = |at: Point3<f64>| {
+        let mut planes = pane();
+        let chart = planes[0].chart;
+        let mut grid = EvidenceGrid::new(
+            Point2::new(-5.0, -5.0),
+            Point2::new(5.0, 5.0),
+            0.2,
+            3,
+            1_000_000,
+        )
+        .expect("a grid");
+        grid.vote_echo(&chart.to_2d(&at));
+        planes[0].evidence = Some(std::sync::Arc::new(grid));
+        planes
+    };
+    let run = |planes: &[BoundedPlane], reach: f64| {
+        let params = DecisionParams {
+            seen_surface_test: true,
+            seen_surface_echo_reach: reach,
+            ..rule_only(false)
+        };
+        decide_in(&point, 50.0, planes, &params, &space)
+    };
+    let near = with_echo_at(crossing + Vector3::new(0.0, 0.3, 0.0));
+    let far = with_echo_at(crossing + Vector3::new(0.0, 1.5, 0.0));
+    assert_eq!(run(&near, 0.6).classes, [Class::Obstacle]);
+    let opening = run(&far, 0.6);
+    assert_eq!(opening.classes, [Class::Normal]);
+    assert_eq!(opening.rules, [Rule::SeenSurface]);
+    assert_eq!(run(&far, 0.0).classes, [Class::Obstacle]);
+}
+
 /// Behind a mirror landmark every point is a Reflection, whatever the
 /// space says (a box behind it that the space calls real).
 #[test]
