@@ -1,11 +1,18 @@
-//! The TOML configuration: the single source of defaults.
+//! The TOML configuration, with one source of defaults: `configs/default.toml`.
 //!
-//! Sections mirror the pipeline's stages; every field has a default, so a
-//! config file only states what it changes. Unknown keys are errors. Two
-//! configurations ship with the crate (and are embedded in the binary):
+//! Sections mirror the pipeline's stages. Two configurations ship with the
+//! crate (embedded in the binary), each a complete file stating every key:
 //! `configs/default.toml` (our improved defaults) and `configs/paper.toml`
 //! (the paper's method and thresholds), selectable as `--config default` or
-//! `--config paper`, or any file path.
+//! `--config paper`. Any other `--config` is a path to a TOML file that
+//! states only what it changes: it is layered key by key over
+//! `configs/default.toml` (tables merge recursively, a key in the file
+//! replaces the built-in's value), or over `configs/paper.toml` when it says
+//! `extends = "paper"` at the top. An empty file is exactly the default
+//! configuration. Unknown keys are errors naming the file, the key path and
+//! the closest valid key. [`Config::default`] is `configs/default.toml`; the
+//! sections' own `Default` impls serve unit tests and are never what a
+//! missing key falls back to.
 
 use std::path::Path;
 
@@ -154,8 +161,11 @@ impl Default for OutputParams {
 }
 
 /// The whole configuration.
+///
+/// Deserialised only from complete tables (a built-in, or a file layered
+/// over one), so no section is filled from its struct's `Default`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct Config {
     /// Built-in sensor name or path to a sensor TOML.
     pub sensor: String,
@@ -185,29 +195,66 @@ pub struct Config {
 }
 
 impl Default for Config {
+    /// The default configuration: `configs/default.toml`, the one source of
+    /// defaults (the same as `Config::resolve("default")`).
     fn default() -> Self {
-        Self {
-            sensor: "pandar_qt64".into(),
-            seed: 0,
-            method: Method::SingleScan,
-            input: InputParams::default(),
-            detector: DetectorParams::default(),
-            single_scan: SingleScanParams::default(),
-            map: MapParams::default(),
-            plane_map: PlaneMapParams::default(),
-            extractor: ExtractorParams::default(),
-            slam: SlamParams::default(),
-            backend: BackendParams::default(),
-            output: OutputParams::default(),
-        }
+        Config::resolve("default")
+            .expect("the embedded configs/default.toml is a valid configuration")
     }
 }
 
-/// Configurations shipped with the crate.
+/// Configurations shipped with the crate: complete files, every key stated.
 const BUILTIN: &[(&str, &str)] = &[
     ("default", include_str!("../configs/default.toml")),
     ("paper", include_str!("../configs/paper.toml")),
 ];
+
+/// The built-in a configuration file layers over when it does not say.
+const DEFAULT_BASE: &str = "default";
+
+/// The top-level key of a configuration file naming the built-in it layers
+/// over.
+const EXTENDS: &str = "extends";
+
+/// Tables whose tag key selects a variant with its own keys (an internally
+/// tagged enum): a file that changes the tag replaces the whole table instead
+/// of merging into it, so the other variant's keys are not carried over.
+const TAGGED_TABLES: &[(&str, &str)] = &[("backend.robust", "kind")];
+
+/// How a configuration file was layered: the built-in under it and the keys
+/// it set, so a user can see what a file changes (`specular config`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Layering {
+    /// The built-in configuration the file layers over (`extends`, default
+    /// `"default"`).
+    pub extends: &'static str,
+    /// Dotted paths of the values the file set (e.g.
+    /// `plane_map.decision.space_margin`), sorted.
+    pub keys: Vec<String>,
+}
+
+impl Layering {
+    /// A one-line TOML comment saying what the file extends and which keys it
+    /// set (at most ten named, then a count).
+    pub fn comment(&self) -> String {
+        const SHOWN: usize = 10;
+        let keys = if self.keys.is_empty() {
+            "no keys".to_string()
+        } else if self.keys.len() <= SHOWN {
+            self.keys.join(", ")
+        } else {
+            format!(
+                "{} and {} more",
+                self.keys[..SHOWN].join(", "),
+                self.keys.len() - SHOWN
+            )
+        };
+        format!(
+            "# extends the built-in \"{}\"; set by the file: {keys}",
+            self.extends
+        )
+    }
+}
 
 impl Config {
     /// Names of the built-in configurations.
@@ -215,26 +262,88 @@ impl Config {
         BUILTIN.iter().map(|(n, _)| *n).collect()
     }
 
-    /// A built-in configuration by name, or a TOML file by path.
+    /// A built-in configuration by name, or a TOML file by path layered over
+    /// a built-in (see [`Config::from_toml`]).
     pub fn resolve(name_or_path: &str) -> Result<Self> {
-        if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
-            return Self::from_toml(text, Path::new(name_or_path));
+        if let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
+            let config: Self =
+                toml::from_str(text).map_err(|e| Error::format(*name, e.to_string()))?;
+            config.validate().map_err(|m| Error::format(*name, m))?;
+            return Ok(config);
         }
         Self::load(Path::new(name_or_path))
     }
 
-    /// Read a configuration file.
+    /// Read a configuration file and layer it over its built-in (see
+    /// [`Config::from_toml`]).
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Self::from_toml(&text, path)
+        Ok(Self::load_layered(path)?.0)
     }
 
-    /// Parse a configuration (`origin` names it in errors) and validate it.
+    /// [`Config::load`], also saying what the file extends and which keys it
+    /// set.
+    pub fn load_layered(path: &Path) -> Result<(Self, Layering)> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_toml_layered(&text, path)
+    }
+
+    /// Parse a configuration file's text (`origin` names it in errors),
+    /// layer it over `configs/default.toml` (or the built-in its top-level
+    /// `extends` names) key by key, and validate the result. Keys unknown to
+    /// the default configuration are errors that suggest the closest valid
+    /// key.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let config: Self =
+        Ok(Self::from_toml_layered(text, origin)?.0)
+    }
+
+    /// [`Config::from_toml`], also saying what the file extends and which
+    /// keys it set.
+    pub fn from_toml_layered(text: &str, origin: &Path) -> Result<(Self, Layering)> {
+        let mut file: toml::Table =
             toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        let extends = match file.remove(EXTENDS) {
+            None => DEFAULT_BASE,
+            Some(toml::Value::String(name)) => BUILTIN
+                .iter()
+                .map(|(n, _)| *n)
+                .find(|n| *n == name)
+                .ok_or_else(|| {
+                    Error::format(
+                        origin,
+                        format!(
+                            "extends = \"{name}\" is not a built-in configuration ({})",
+                            Self::builtin_names().join(", ")
+                        ),
+                    )
+                })?,
+            Some(other) => {
+                return Err(Error::format(
+                    origin,
+                    format!(
+                        "extends must be the name of a built-in configuration ({}), got {other}",
+                        Self::builtin_names().join(", ")
+                    ),
+                ))
+            }
+        };
+        // Known keys: the default configuration's, and `extends` (already
+        // taken out of the file) so that a misspelling of it is suggested.
+        let mut known = builtin_table(DEFAULT_BASE);
+        known.insert(EXTENDS.into(), DEFAULT_BASE.into());
+        let unknown = unknown_keys(&file, &known, "");
+        if !unknown.is_empty() {
+            return Err(Error::format(origin, unknown.join("; ")));
+        }
+        let mut keys = Vec::new();
+        leaf_paths(&file, "", &mut keys);
+        keys.sort();
+        let mut merged = builtin_table(extends);
+        merge(&mut merged, file, "");
+        let config: Self = toml::Value::Table(merged)
+            .try_into()
+            .map_err(|e: toml::de::Error| Error::format(origin, e.to_string()))?;
         config.validate().map_err(|m| Error::format(origin, m))?;
-        Ok(config)
+        Ok((config, Layering { extends, keys }))
     }
 
     /// The configuration as TOML (written beside every run's outputs).
@@ -350,6 +459,121 @@ impl Config {
     }
 }
 
+/// A built-in configuration as a TOML table.
+fn builtin_table(name: &str) -> toml::Table {
+    let (_, text) = BUILTIN
+        .iter()
+        .find(|(n, _)| *n == name)
+        .expect("a built-in configuration name");
+    toml::from_str(text).expect("the embedded built-in configurations are valid TOML")
+}
+
+/// `prefix.key`, or `key` at the top level.
+fn key_path(prefix: &str, key: &str) -> String {
+    if prefix.is_empty() {
+        key.to_string()
+    } else {
+        format!("{prefix}.{key}")
+    }
+}
+
+/// Layer `over` onto `base`: a key in `over` replaces the value in `base`,
+/// except that tables present in both merge recursively (a tagged table
+/// whose tag changes is replaced whole, see [`TAGGED_TABLES`]).
+fn merge(base: &mut toml::Table, over: toml::Table, prefix: &str) {
+    for (key, value) in over {
+        let path = key_path(prefix, &key);
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) if !tag_changes(&path, b, &o) => {
+                merge(b, o, &path)
+            }
+            (_, value) => {
+                base.insert(key, value);
+            }
+        }
+    }
+}
+
+/// Whether `over` selects another variant of the tagged table at `path`.
+fn tag_changes(path: &str, base: &toml::Table, over: &toml::Table) -> bool {
+    TAGGED_TABLES
+        .iter()
+        .any(|(p, tag)| *p == path && over.get(*tag).is_some_and(|t| Some(t) != base.get(*tag)))
+}
+
+/// Dotted paths of the non-table values in `table`.
+fn leaf_paths(table: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+    for (key, value) in table {
+        let path = key_path(prefix, key);
+        match value {
+            toml::Value::Table(t) => leaf_paths(t, &path, out),
+            _ => out.push(path),
+        }
+    }
+}
+
+/// One message per key of `file` that `known` (the default configuration's
+/// table at the same path) does not have, each suggesting the closest known
+/// key of that table, or listing them when none is close.
+fn unknown_keys(file: &toml::Table, known: &toml::Table, prefix: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for (key, value) in file {
+        let path = key_path(prefix, key);
+        match (known.get(key), value) {
+            (None, _) => {
+                let closest = known
+                    .keys()
+                    .map(|k| (edit_distance(key, k), k))
+                    .min_by_key(|(d, _)| *d);
+                let hint = match closest {
+                    Some((d, k)) if d <= (key.chars().count() / 3).max(2) => {
+                        format!("did you mean `{}`?", key_path(prefix, k))
+                    }
+                    _ => format!(
+                        "valid keys here: {}",
+                        known.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                };
+                out.push(format!("unknown key `{path}` ({hint})"));
+            }
+            (Some(toml::Value::Table(k)), toml::Value::Table(f)) => {
+                out.extend(unknown_keys(f, k, &path))
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Edit distance between two keys: insertions, deletions, substitutions and
+/// transpositions of adjacent characters each count one (optimal string
+/// alignment), so `space_tset` is one edit from `space_test`.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    // d[i][j]: distance between a[..i] and b[..j].
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for j in 0..=b.len() {
+        d[0][j] = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut v = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                v = v.min(d[i - 2][j - 2] + 1);
+            }
+            d[i][j] = v;
+        }
+    }
+    d[a.len()][b.len()]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -378,5 +602,141 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("detector.dual_gap must be positive"), "{e}");
+    }
+
+    /// Dotted paths of every value in a table.
+    fn paths(table: &toml::Table) -> Vec<String> {
+        let mut out = Vec::new();
+        leaf_paths(table, "", &mut out);
+        out.sort();
+        out
+    }
+
+    #[test]
+    fn default_is_the_default_file() {
+        let parsed: Config = toml::from_str(include_str!("../configs/default.toml"))
+            .expect("configs/default.toml parses");
+        assert_eq!(Config::default(), parsed);
+        assert_eq!(Config::default(), Config::resolve("default").unwrap());
+        assert_eq!(Config::default().method, Method::PlaneOptimized);
+    }
+
+    /// Every built-in states every key the configuration has, so none is
+    /// filled from a section's `Default` impl.
+    #[test]
+    fn builtins_are_complete() {
+        let Ok(toml::Value::Table(serialised)) = toml::Value::try_from(Config::default()) else {
+            panic!("the configuration serialises to a table");
+        };
+        let all = paths(&serialised);
+        for name in Config::builtin_names() {
+            assert_eq!(paths(&builtin_table(name)), all, "configs/{name}.toml");
+        }
+    }
+
+    #[test]
+    fn an_empty_file_is_the_default() {
+        let c = Config::from_toml("", Path::new("empty.toml")).unwrap();
+        assert_eq!(c, Config::default());
+        let (_, layering) = Config::from_toml_layered("", Path::new("empty.toml")).unwrap();
+        assert_eq!(layering.extends, "default");
+        assert!(layering.keys.is_empty());
+        let c = Config::from_toml("extends = \"paper\"", Path::new("p.toml")).unwrap();
+        assert_eq!(c, Config::resolve("paper").unwrap());
+    }
+
+    #[test]
+    fn a_file_changes_only_its_keys() {
+        let text = "seed = 7\n[plane_map.decision]\nspace_margin = 0.3\n[map.panes.fit]\nsolver = \"joint-lp\"";
+        let (c, layering) = Config::from_toml_layered(text, Path::new("c.toml")).unwrap();
+        let mut want = Config::default();
+        want.seed = 7;
+        want.plane_map.decision.space_margin = 0.3;
+        want.map.panes.fit.solver = crate::map::boundary_fit::BoundarySolver::JointLp;
+        assert_eq!(c, want);
+        assert_eq!(
+            layering.keys,
+            [
+                "map.panes.fit.solver",
+                "plane_map.decision.space_margin",
+                "seed"
+            ]
+        );
+        assert!(
+            layering.comment().contains("\"default\""),
+            "{}",
+            layering.comment()
+        );
+
+        let text = "extends = \"paper\"\n[plane_map.decision]\nspace_margin = 0.3";
+        let (c, layering) = Config::from_toml_layered(text, Path::new("c.toml")).unwrap();
+        let mut want = Config::resolve("paper").unwrap();
+        want.plane_map.decision.space_margin = 0.3;
+        assert_eq!(c, want);
+        assert_eq!(layering.extends, "paper");
+    }
+
+    #[test]
+    fn changing_a_tagged_table_variant_replaces_it() {
+        let c =
+            Config::from_toml("[backend.robust]\nkind = \"none\"", Path::new("c.toml")).unwrap();
+        assert_eq!(c.backend.robust, crate::backend::RobustKernel::None);
+        let c = Config::from_toml(
+            "[backend.robust]\nkind = \"cauchy\"\nk = 2.0",
+            Path::new("c.toml"),
+        )
+        .unwrap();
+        assert_eq!(
+            c.backend.robust,
+            crate::backend::RobustKernel::Cauchy { k: 2.0 }
+        );
+        let c = Config::from_toml("[backend.robust]\nk = 2.0", Path::new("c.toml")).unwrap();
+        assert_eq!(
+            c.backend.robust,
+            crate::backend::RobustKernel::Huber { k: 2.0 }
+        );
+    }
+
+    #[test]
+    fn misspelt_keys_suggest_the_closest() {
+        let e = Config::from_toml(
+            "[plane_map.decision]\nspace_tset = true",
+            Path::new("my.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.starts_with("my.toml: "), "{e}");
+        assert!(e.contains("`plane_map.decision.space_tset`"), "{e}");
+        assert!(
+            e.contains("did you mean `plane_map.decision.space_test`?"),
+            "{e}"
+        );
+        let e = Config::from_toml("[plane_mapp]\nhull_margin = 1.0", Path::new("my.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did you mean `plane_map`?"), "{e}");
+        let e = Config::from_toml("[input]\nzzz = 1", Path::new("my.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("valid keys here: frame_cache_mb, pose_tolerance"),
+            "{e}"
+        );
+        let e = Config::from_toml("extend = \"paper\"", Path::new("my.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did you mean `extends`?"), "{e}");
+        let e = Config::from_toml("extends = \"papr\"", Path::new("my.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("my.toml") && e.contains("default, paper"), "{e}");
+    }
+
+    #[test]
+    fn edit_distances() {
+        assert_eq!(edit_distance("space_tset", "space_test"), 1);
+        assert_eq!(edit_distance("sensorr", "sensor"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
     }
 }

@@ -187,6 +187,35 @@ fn an_unknown_config_is_a_clear_error() {
 }
 
 #[test]
+fn config_prints_a_file_layered_over_its_built_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("mine.toml");
+    std::fs::write(&path, "extends = \"paper\"\n[map]\nmin_observations = 3\n").unwrap();
+    let o = specular(&["config", "--config", s(&path)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let first = stdout.lines().next().unwrap();
+    assert!(
+        first.starts_with('#')
+            && first.contains("\"paper\"")
+            && first.contains("map.min_observations"),
+        "{first}"
+    );
+    let mut want = specular::config::Config::resolve("paper").unwrap();
+    want.map.min_observations = 3;
+    assert!(stdout.ends_with(&want.to_toml()), "{stdout}");
+
+    std::fs::write(&path, "[map]\nmin_observatons = 3\n").unwrap();
+    let o = specular(&["config", "--config", s(&path)]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains(s(&path)) && err.contains("did you mean `map.min_observations`?"),
+        "{err}"
+    );
+}
+
+#[test]
 fn plane_optimized_writes_the_map_files() {
     let out = tempfile::tempdir().unwrap();
     let o = detect_sample(out.path(), &[]);

@@ -27,7 +27,8 @@ pub struct DemoArgs {
     /// Output directory.
     #[arg(long, default_value = "runs/demo")]
     pub out: PathBuf,
-    /// Configuration: built-in name (default, paper) or TOML file.
+    /// Configuration: built-in name (default, paper) or a TOML file of
+    /// changes, layered over the default (or `extends = "paper"`).
     #[arg(long, default_value = "default")]
     pub config: String,
     /// Built-in scene name or scene TOML to simulate.

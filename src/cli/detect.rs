@@ -38,7 +38,8 @@ pub struct DetectArgs {
     /// Method; defaults to the configuration's `method`.
     #[arg(long, value_enum)]
     pub method: Option<MethodArg>,
-    /// Configuration: built-in name (default, paper) or TOML file.
+    /// Configuration: built-in name (default, paper) or a TOML file of
+    /// changes, layered over the default (or `extends = "paper"`).
     #[arg(long, default_value = "default")]
     pub config: String,
     /// Print milliseconds per frame for every stage.

@@ -52,9 +52,12 @@ enum Command {
     Graph(graph::GraphArgs),
     /// Reproduce the paper's experiments beside its published tables.
     Reproduce(reproduce::ReproduceArgs),
-    /// Print the effective configuration as TOML (every key with its value).
+    /// Print the effective configuration as TOML (every key with its value;
+    /// for a file, first a comment naming the built-in it layers over and
+    /// the keys it sets).
     Config {
-        /// Built-in name (default, paper) or path to a TOML file.
+        /// Built-in name (default, paper) or path to a TOML file layered over
+        /// the default (or `extends = "paper"`).
         #[arg(long, default_value = "default")]
         config: String,
     },
@@ -98,7 +101,13 @@ pub fn run() -> Result<()> {
         Command::Graph(args) => graph::run(args),
         Command::Reproduce(args) => reproduce::run(args),
         Command::Config { config } => {
-            print!("{}", load_config(&config)?.to_toml());
+            if Config::builtin_names().contains(&config.as_str()) {
+                print!("{}", Config::resolve(&config)?.to_toml());
+            } else {
+                // A file: say what it layers over and what it changes.
+                let (merged, layering) = Config::load_layered(std::path::Path::new(&config))?;
+                print!("{}\n{}", layering.comment(), merged.to_toml());
+            }
             Ok(())
         }
     }

@@ -33,7 +33,8 @@ pub struct SlamArgs {
     /// world frame, all of them score the trajectory.
     #[arg(long)]
     pub gt_poses: Option<PathBuf>,
-    /// Configuration: built-in name (default, paper) or TOML file.
+    /// Configuration: built-in name (default, paper) or a TOML file of
+    /// changes, layered over the default (or `extends = "paper"`).
     #[arg(long, default_value = "default")]
     pub config: String,
     /// Skip the classification pass (trajectory only).
