@@ -556,8 +556,8 @@ fn edit_distance(a: &str, b: &str) -> usize {
     for (i, row) in d.iter_mut().enumerate() {
         row[0] = i;
     }
-    for j in 0..=b.len() {
-        d[0][j] = j;
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
     }
     for i in 1..=a.len() {
         for j in 1..=b.len() {
@@ -649,8 +649,10 @@ mod tests {
     fn a_file_changes_only_its_keys() {
         let text = "seed = 7\n[plane_map.decision]\nspace_margin = 0.3\n[map.panes.fit]\nsolver = \"joint-lp\"";
         let (c, layering) = Config::from_toml_layered(text, Path::new("c.toml")).unwrap();
-        let mut want = Config::default();
-        want.seed = 7;
+        let mut want = Config {
+            seed: 7,
+            ..Config::default()
+        };
         want.plane_map.decision.space_margin = 0.3;
         want.map.panes.fit.solver = crate::map::boundary_fit::BoundarySolver::JointLp;
         assert_eq!(c, want);
