@@ -271,7 +271,21 @@ impl Config {
             config.validate().map_err(|m| Error::format(*name, m))?;
             return Ok(config);
         }
-        Self::load(Path::new(name_or_path))
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            // Neither a built-in nor a file: say which built-ins there are.
+            let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+            let closest = names
+                .iter()
+                .min_by_key(|n| edit_distance(name_or_path, n))
+                .filter(|n| edit_distance(name_or_path, n) <= 3);
+            let hint = closest.map_or(String::new(), |n| format!("; did you mean `{n}`?"));
+            return Err(Error::Config(format!(
+                "`{name_or_path}` is neither a built-in configuration ({}) nor a file{hint}",
+                names.join(", ")
+            )));
+        }
+        Self::load(path)
     }
 
     /// Read a configuration file and layer it over its built-in (see

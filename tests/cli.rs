@@ -256,3 +256,38 @@ fn plane_optimized_without_poses_is_a_clear_error() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("needs poses"), "{}", stderr(&o));
 }
+
+/// An OS error is said once, not once by the library's error and again by
+/// its source.
+#[test]
+fn an_os_error_is_printed_once() {
+    let out = tempfile::tempdir().unwrap();
+    let missing = out.path().join("no-such-frames");
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&missing),
+        "--method",
+        "single-scan",
+        "--out",
+        s(&out.path().join("run")),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(err.contains("no-such-frames"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}
+
+/// A misspelt built-in configuration name lists the built-ins and suggests
+/// the closest.
+#[test]
+fn a_misspelt_builtin_config_is_suggested() {
+    let out = tempfile::tempdir().unwrap();
+    let o = detect_sample(&out.path().join("run"), &["--config", "defualt"]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("default, paper") && err.contains("did you mean `default`"),
+        "{err}"
+    );
+}
