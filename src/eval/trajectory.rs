@@ -80,13 +80,25 @@ pub struct TrajectoryError {
 impl TrajectoryError {
     /// A one-line summary.
     pub fn summary(&self) -> String {
+        // Without a whole segment there is no RPE to speak of (NaN).
+        let rpe = if self.rpe_segments > 0 {
+            format!(
+                "RPE {:.2} % and {:.3} deg/m over {} segments of {:.1} m",
+                self.rpe_translation_percent,
+                self.rpe_rotation_deg_per_m,
+                self.rpe_segments,
+                self.rpe_segment
+            )
+        } else {
+            format!(
+                "no RPE (path {:.1} m, shorter than one {:.1} m segment)",
+                self.path_length, self.rpe_segment
+            )
+        };
         format!(
-            "ATE RMSE {:.3} m (max {:.3}), RPE {:.2} % and {:.3} deg/m over {:.1} m segments, drift {:.2} % ({:.3} m over {:.1} m)",
+            "ATE RMSE {:.3} m (max {:.3}) after SE(3) alignment, {rpe}, drift {:.2} % ({:.3} m over {:.1} m, from the first pose)",
             self.ate_rmse,
             self.ate_max,
-            self.rpe_translation_percent,
-            self.rpe_rotation_deg_per_m,
-            self.rpe_segment,
             self.drift_percent,
             self.final_error,
             self.path_length
@@ -234,5 +246,19 @@ mod tests {
             e.summary()
         );
         assert!(trajectory_error(&est[..3], &truth, 1.0).is_err());
+    }
+
+    /// The summary says the ATE is SE(3)-aligned, and a path shorter than
+    /// one RPE segment prints no NaN.
+    #[test]
+    fn a_short_run_summary_has_no_nan() {
+        let truth = line(5, 0.1);
+        let e = trajectory_error(&truth, &truth, 10.0).unwrap();
+        assert_eq!(e.rpe_segments, 0);
+        let s = e.summary();
+        assert!(!s.contains("NaN") && s.contains("no RPE"), "{s}");
+        assert!(s.contains("SE(3) alignment"), "{s}");
+        let long = trajectory_error(&line(50, 0.1), &line(50, 0.1), 1.0).unwrap();
+        assert!(long.summary().contains("segments of 1.0 m"));
     }
 }
