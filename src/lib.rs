@@ -58,3 +58,17 @@ pub mod slam;
 pub mod viz;
 
 pub use error::{Error, Result};
+
+/// The version of specular, written into every run's `metrics.json` and
+/// `report.md` so a result can be traced to the code that made it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The git commit specular was built from ("unknown" outside a git
+/// checkout); see [`VERSION`].
+pub const GIT_COMMIT: &str = env!("SPECULAR_GIT_COMMIT");
+
+/// `{"version": .., "commit": ..}`: what produced a result, for the
+/// `specular` key of `metrics.json`.
+pub fn provenance() -> serde_json::Value {
+    serde_json::json!({ "version": VERSION, "commit": GIT_COMMIT })
+}

@@ -291,3 +291,25 @@ fn a_misspelt_builtin_config_is_suggested() {
         "{err}"
     );
 }
+
+/// metrics.json and report.md say which version and commit made them.
+#[test]
+fn outputs_name_the_version_that_made_them() {
+    let out = tempfile::tempdir().unwrap();
+    let run = out.path().join("run");
+    let o = detect_sample(&run, &["--method", "single-scan"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(metrics["specular"]["version"], env!("CARGO_PKG_VERSION"));
+    let commit = metrics["specular"]["commit"].as_str().unwrap();
+    assert!(!commit.is_empty(), "{metrics}");
+    let report = std::fs::read_to_string(run.join("report.md")).unwrap();
+    assert!(
+        report.contains(&format!(
+            "specular {} (commit {commit})",
+            env!("CARGO_PKG_VERSION")
+        )),
+        "{report}"
+    );
+}

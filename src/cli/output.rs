@@ -198,6 +198,7 @@ pub(crate) fn write_summaries(
         // The scores, and which rule decided how many points of each label.
         let mut value = serde_json::to_value(conf.metrics()).context("serialising metrics")?;
         if let Some(obj) = value.as_object_mut() {
+            obj.insert("specular".into(), specular::provenance());
             obj.insert(
                 "rules".into(),
                 serde_json::to_value(run.rules).context("serialising rules")?,

@@ -182,6 +182,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "degenerate_frames": degenerate,
         "fallback_frames": fallback,
         "landmarks": slam.map.landmarks.len(),
+        "specular": specular::provenance(),
         "frames_per_cpu_second": fps,
         "trajectory": trajectory,
         "trajectory_tracking_only": tracking,

@@ -95,7 +95,14 @@ pub(crate) fn write_visual(
     }
     files.push(("report.md".into(), "this report".into()));
 
-    let mut summary = vec![format!("{frames} frames, method {}", config.method.name())];
+    let mut summary = vec![
+        format!(
+            "specular {} (commit {})",
+            specular::VERSION,
+            specular::GIT_COMMIT
+        ),
+        format!("{frames} frames, method {}", config.method.name()),
+    ];
     if let Some(m) = map {
         summary.push(format!(
             "plane map: {} landmarks, {} used ({})",
