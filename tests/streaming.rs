@@ -133,18 +133,21 @@ fn a_truncated_frame_in_a_long_sequence_is_named_and_leaves_nothing() {
     let bytes = std::fs::read(bad).unwrap();
     std::fs::write(bad, &bytes[..bytes.len() * 2 / 3]).unwrap();
     let name = bad.file_name().unwrap().to_str().unwrap();
-    for method in ["plane-optimized", "single-scan"] {
-        let out = tmp.path().join(format!("out-{method}"));
-        let o = Command::new(env!("CARGO_BIN_EXE_specular"))
+    let detect = |out: &std::path::Path, extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_specular"))
             .args(["detect", "--frames"])
             .arg(&frames_dir)
             .arg("--poses")
             .arg(tmp.path().join("poses.txt"))
             .arg("--out")
-            .arg(&out)
-            .args(["--method", method])
+            .arg(out)
+            .args(extra)
             .output()
-            .unwrap();
+            .unwrap()
+    };
+    for method in ["plane-optimized", "single-scan"] {
+        let out = tmp.path().join(format!("out-{method}"));
+        let o = detect(&out, &["--method", method]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{method}: {err}");
         assert!(
@@ -157,16 +160,7 @@ fn a_truncated_frame_in_a_long_sequence_is_named_and_leaves_nothing() {
     // Into an existing directory: it stays, empty.
     let out = tmp.path().join("existing");
     std::fs::create_dir(&out).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_specular"))
-        .args(["detect", "--frames"])
-        .arg(&frames_dir)
-        .arg("--poses")
-        .arg(tmp.path().join("poses.txt"))
-        .arg("--out")
-        .arg(&out)
-        .args(["--method", "single-scan", "--no-mcap"])
-        .output()
-        .unwrap();
+    let o = detect(&out, &["--method", "single-scan", "--no-mcap"]);
     assert!(!o.status.success());
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0);
 }
