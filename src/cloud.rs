@@ -30,6 +30,32 @@ impl Point {
     pub fn range(&self) -> f64 {
         self.position().coords.norm()
     }
+
+    /// Whether the position and the intensity are all finite (no NaN, no
+    /// infinity): the points the readers keep (see [`drop_non_finite`]).
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.xyz[0].is_finite()
+            && self.xyz[1].is_finite()
+            && self.xyz[2].is_finite()
+            && self.intensity.is_finite()
+    }
+}
+
+/// Remove the points that are not [finite](Point::is_finite), keeping the
+/// order of the others (and so their alignment with anything read in the
+/// same order, such as their labels); returns how many were removed.
+///
+/// Every reader (PLY, ROS 2 bag) applies it, so a non-finite point is
+/// treated the same whatever its source: dropped and counted in
+/// [`Frame::dropped_non_finite`], never classified or written.
+pub fn drop_non_finite(points: &mut Vec<Point>) -> usize {
+    let before = points.len();
+    if points.iter().all(Point::is_finite) {
+        return 0;
+    }
+    points.retain(Point::is_finite);
+    before - points.len()
 }
 
 /// One frame: a revolution of the sensor with both returns.
@@ -43,6 +69,13 @@ pub struct Frame {
     pub points: Vec<Point>,
     /// Whether the source carried ground-truth labels.
     pub has_labels: bool,
+    /// Points the reader dropped because a coordinate (x, y or z) or the
+    /// intensity was NaN or infinite. Real drivers publish such points for
+    /// beams without a return (ROS 2 `PointCloud2` with `is_dense = false`);
+    /// they have no position to classify or map, so they are never in
+    /// [`points`](Self::points), and this count is all that is left of them
+    /// (reported per frame and per run). 0 for frames built in memory.
+    pub dropped_non_finite: usize,
 }
 
 impl Frame {

@@ -42,6 +42,7 @@ fn sample_frame(has_labels: bool) -> Frame {
         stamp: 1689496219.65256,
         points,
         has_labels,
+        dropped_non_finite: 0,
     }
 }
 
@@ -326,22 +327,38 @@ fn non_numeric_field() {
     );
 }
 
+/// Non-finite coordinates are not errors: the point is dropped and counted
+/// (real recordings hold such points), in both encodings.
 #[test]
-fn nan_coordinates() {
+fn nan_coordinates_are_dropped() {
     let bad = "2.6758089 nan 1.0 0.98 0.04 0.14 14.0 36.0 1.0 4.0";
-    expect_err(
-        &ascii_ply(&PROPS, &[ROW, ROW, ROW, ROW, ROW, bad]),
-        "vertex 5: coordinates are not finite (NaN)",
-    );
-    let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 1\n".to_vec();
+    let frame = parse_frame(&ascii_ply(&PROPS, &[ROW, ROW, ROW, ROW, ROW, bad]), path()).unwrap();
+    assert_eq!((frame.points.len(), frame.dropped_non_finite), (5, 1));
+    let mut b = b"ply\nformat binary_little_endian 1.0\nelement vertex 2\n".to_vec();
     for p in ["x", "y", "z", "intensity", "ring", "return"] {
         b.extend_from_slice(format!("property float {p}\n").as_bytes());
     }
     b.extend_from_slice(b"end_header\n");
-    for v in [f32::NAN, 0.0, 0.0, 1.0, 1.0, 1.0] {
+    for v in [
+        f32::NAN,
+        0.0,
+        0.0,
+        1.0,
+        1.0,
+        1.0,
+        1.0,
+        2.0,
+        3.0,
+        1.0,
+        1.0,
+        1.0,
+    ] {
         b.extend_from_slice(&v.to_le_bytes());
     }
-    expect_err(&b, "vertex 0: coordinates are not finite (NaN)");
+    let frame = parse_frame(&b, path()).unwrap();
+    assert_eq!(frame.dropped_non_finite, 1);
+    assert_eq!(frame.points.len(), 1);
+    assert_eq!(frame.points[0].xyz, [1.0, 2.0, 3.0]);
 }
 
 #[test]

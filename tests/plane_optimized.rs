@@ -164,6 +164,7 @@ fn mirror_frame(sensor: &SensorModel, lo: &Point3<f64>, hi: &Point3<f64>) -> Fra
         stamp: 1000.0,
         points,
         has_labels: true,
+        dropped_non_finite: 0,
     }
 }
 

@@ -91,6 +91,12 @@ pub fn run(args: DetectArgs) -> Result<()> {
         config.method.name(),
         args.out.join("predictions").display()
     );
+    if result.run.dropped_non_finite > 0 {
+        println!(
+            "{} input points dropped: a coordinate or the intensity was NaN or infinite",
+            result.run.dropped_non_finite
+        );
+    }
     if let Some(map) = &result.map {
         println!(
             "plane map: {} landmarks, {} used ({}); planes.json, around_corner.ply",

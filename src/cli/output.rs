@@ -169,7 +169,9 @@ impl Drop for RunWriter {
 }
 
 /// Write the summaries of a finished run into `out`: the configuration,
-/// the metrics (when labelled) with the rule tally, and, with a plane map,
+/// the metrics (when labelled) with the rule tally and the number of input
+/// points dropped as non-finite (`dropped_non_finite_points`), and, with a
+/// plane map,
 /// `planes.json` and `around_corner.ply`.
 pub(crate) fn write_summaries(
     out: &Path,
@@ -202,6 +204,10 @@ pub(crate) fn write_summaries(
             obj.insert(
                 "rules".into(),
                 serde_json::to_value(run.rules).context("serialising rules")?,
+            );
+            obj.insert(
+                "dropped_non_finite_points".into(),
+                run.dropped_non_finite.into(),
             );
         }
         let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;

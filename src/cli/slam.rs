@@ -165,12 +165,15 @@ pub fn run(args: SlamArgs) -> Result<()> {
     // true ones).
     let mut classification = None;
     let mut reference = None;
+    // Counted by the classification pass (`None` with --no-classify).
+    let mut dropped_non_finite = None;
     if !args.no_classify {
         // Predictions are written frame by frame as they are classified.
         let mut writer = RunWriter::new(out, &config, OutputOptions::default())?;
         let estimated =
             classify_with_poses(&mut sequence, slam.poses.clone(), &config, &mut writer)?;
         writer.finish()?;
+        dropped_non_finite = Some(estimated.run.dropped_non_finite);
         classification = estimated.run.confusion.map(|c| c.metrics());
         if classification.is_some() && truth.is_some() {
             let with_truth = run_plane_optimized_into(&sequence, &config, &mut Discard)?;
@@ -197,6 +200,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         })),
         "classification": classification,
         "classification_true_poses": reference,
+        "dropped_non_finite_points": dropped_non_finite,
     });
     let text = serde_json::to_string_pretty(&metrics).context("serialising metrics")?;
     io::write_atomic(&out.join("metrics.json"), |w| {

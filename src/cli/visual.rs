@@ -103,6 +103,12 @@ pub(crate) fn write_visual(
         ),
         format!("{frames} frames, method {}", config.method.name()),
     ];
+    if run.dropped_non_finite > 0 {
+        summary.push(format!(
+            "{} input points dropped: a coordinate or the intensity was NaN or infinite",
+            run.dropped_non_finite
+        ));
+    }
     if let Some(m) = map {
         summary.push(format!(
             "plane map: {} landmarks, {} used ({})",

@@ -308,6 +308,7 @@ pub(crate) mod testing {
             stamp: 0.0,
             points,
             has_labels: true,
+            dropped_non_finite: 0,
         }
     }
 }

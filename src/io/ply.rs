@@ -13,14 +13,23 @@
 //! library for unusual forms (`nan`, `inf`, more than 19 significant digits,
 //! large exponents). Both give the same (correctly rounded) values.
 //! Errors name the file and, for ascii bodies, the 1-based line number;
-//! vertex numbers in messages are 0-based indices into [`Frame::points`].
+//! vertex numbers in messages are 0-based indices into the file's vertices.
+//!
+//! Vertices whose `x`, `y`, `z` or `intensity` is NaN or infinite (`nan`,
+//! `inf` in ascii) are not errors: real recordings hold them for beams
+//! without a return. They are dropped after parsing and counted in
+//! [`Frame::dropped_non_finite`], exactly as the ROS 2 bag reader does
+//! (see [`crate::cloud::drop_non_finite`]); the other points keep their
+//! order and their labels. A malformed file (bad header, wrong counts,
+//! truncated, a field that is not a number, an integer out of range) is
+//! still an error naming the file.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use crate::cloud::{Frame, Point};
+use crate::cloud::{drop_non_finite, Frame, Point};
 use crate::io::frames::parse_stamp;
 use crate::{Error, Result};
 
@@ -74,15 +83,17 @@ pub fn parse_frame(bytes: &[u8], path: &Path) -> Result<Frame> {
     let header = parse_header(bytes).map_err(fail)?;
     let layout = VertexLayout::new(&header).map_err(fail)?;
     let body = &bytes[header.body_start..];
-    let points = match header.format {
+    let mut points = match header.format {
         Format::Ascii => parse_ascii(body, &header, &layout).map_err(fail)?,
         Format::BinaryLittleEndian => parse_binary(body, &header, &layout).map_err(fail)?,
     };
+    let dropped_non_finite = drop_non_finite(&mut points);
     Ok(Frame {
         name,
         stamp,
         points,
         has_labels: layout.has_labels,
+        dropped_non_finite,
     })
 }
 
@@ -507,22 +518,6 @@ fn bad_int(slot: Slot, v: f64, loc: Loc) -> String {
     }
 }
 
-#[inline]
-fn check_point(p: &Point, loc: Loc) -> std::result::Result<(), String> {
-    if !(p.xyz[0].is_finite() && p.xyz[1].is_finite() && p.xyz[2].is_finite()) {
-        let what = if p.xyz.iter().any(|c| c.is_nan()) {
-            "NaN"
-        } else {
-            "infinite"
-        };
-        return Err(format!("{loc}: coordinates are not finite ({what})"));
-    }
-    if !p.intensity.is_finite() {
-        return Err(format!("{loc}: intensity is not finite ({})", p.intensity));
-    }
-    Ok(())
-}
-
 fn truncated(expected: usize, got: usize) -> String {
     format!("expected {expected} vertices, file ends after {got} (truncated?)")
 }
@@ -621,7 +616,6 @@ fn parse_binary(
                 _ => store_int(&mut p, slot, ty.read_le(b), loc)?,
             }
         }
-        check_point(&p, loc)?;
         points.push(p);
     }
     Ok(points)
@@ -1465,7 +1459,6 @@ fn parse_ascii_with(
             pos += 1;
         }
         line += 1;
-        check_point(&p, loc)?;
         points.push(p);
     }
     // Anything after the vertices must belong to later elements.
@@ -1484,6 +1477,102 @@ fn parse_ascii_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Four points, the third with coordinates `bad` (and an odd label, so
+    /// label alignment is checked): as ascii and as binary PLY bytes.
+    fn with_bad_point(bad: [f32; 3]) -> (Vec<Point>, [Vec<u8>; 2]) {
+        let points: Vec<Point> = (0..4u8)
+            .map(|i| Point {
+                xyz: if i == 2 {
+                    bad
+                } else {
+                    [1.5 + i as f32, -2.0, 0.25]
+                },
+                intensity: 10.0 + i as f32,
+                ring: 7 + i as u16,
+                ret: 1 + i % 2,
+                label: i + 1,
+            })
+            .collect();
+        let header = |format: &str| {
+            format!(
+                "ply\nformat {format} 1.0\nelement vertex 4\nproperty float x\n\
+                 property float y\nproperty float z\nproperty float intensity\n\
+                 property ushort ring\nproperty uchar return\nproperty uchar label\nend_header\n"
+            )
+            .into_bytes()
+        };
+        let mut ascii = header("ascii");
+        let mut binary = header("binary_little_endian");
+        for p in &points {
+            let [x, y, z] = p.xyz;
+            // `{}` writes NaN as `NaN` and infinity as `inf`/`-inf`.
+            let line = format!(
+                "{x} {y} {z} {} {} {} {}\n",
+                p.intensity, p.ring, p.ret, p.label
+            );
+            ascii.extend_from_slice(line.as_bytes());
+            for v in [x, y, z, p.intensity] {
+                binary.extend_from_slice(&v.to_le_bytes());
+            }
+            binary.extend_from_slice(&p.ring.to_le_bytes());
+            binary.extend_from_slice(&[p.ret, p.label]);
+        }
+        (points, [ascii, binary])
+    }
+
+    /// A NaN or infinite point among finite ones is dropped and counted,
+    /// in both encodings; the others keep their order and labels.
+    #[test]
+    fn non_finite_points_are_dropped_and_counted() {
+        let path = Path::new("/data/1689496219.652560.ply");
+        for bad in [
+            [1.0, f32::NAN, 2.0],
+            [f32::NAN; 3],
+            [f32::INFINITY, 0.0, 0.0],
+            [0.0, 0.0, f32::NEG_INFINITY],
+        ] {
+            let (points, files) = with_bad_point(bad);
+            let mut want = points.clone();
+            want.remove(2);
+            for bytes in files {
+                let frame = parse_frame(&bytes, path).unwrap();
+                assert_eq!(frame.dropped_non_finite, 1, "{bad:?}");
+                assert_eq!(frame.points, want, "{bad:?}");
+                assert!(frame.has_labels);
+                assert_eq!(frame.labels(), vec![1, 2, 4]);
+            }
+        }
+        // Nothing dropped from a clean frame.
+        let (points, files) = with_bad_point([3.0, 3.0, 3.0]);
+        for bytes in files {
+            let frame = parse_frame(&bytes, path).unwrap();
+            assert_eq!(frame.dropped_non_finite, 0);
+            assert_eq!(frame.points, points);
+        }
+    }
+
+    /// A NaN intensity drops its point the same way; malformed files are
+    /// still errors naming the file.
+    #[test]
+    fn non_finite_intensity_is_dropped_and_malformed_files_still_fail() {
+        let path = Path::new("/data/1689496219.652560.ply");
+        let (_, [ascii, _]) = with_bad_point([3.0, 3.0, 3.0]);
+        let text = String::from_utf8(ascii).unwrap();
+        let nan_intensity = text.replacen(" 11 ", " nan ", 1);
+        assert_ne!(nan_intensity, text);
+        let frame = parse_frame(nan_intensity.as_bytes(), path).unwrap();
+        assert_eq!((frame.points.len(), frame.dropped_non_finite), (3, 1));
+        for bad in [
+            text.replacen("element vertex 4", "element vertex 5", 1),
+            text.replacen("element vertex 4", "element vertex 3", 1),
+            text.replacen("end_header", "end_hdr", 1),
+            text.replacen(" 11 ", " x11 ", 1),
+        ] {
+            let err = parse_frame(bad.as_bytes(), path).unwrap_err().to_string();
+            assert!(err.contains("1689496219.652560.ply"), "{err}");
+        }
+    }
 
     fn fast(s: &str) -> Option<f64> {
         parse_fast(s.as_bytes(), 0).map(|(v, end)| {

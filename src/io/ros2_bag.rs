@@ -5,11 +5,17 @@
 //! (or `ret`, 1 first / 2 last) and `label` when present (any numeric type).
 //! A frame is named after its header stamp (`{:.6}` seconds), like a 3DRef
 //! file stem.
+//!
+//! Points whose `x`, `y`, `z` or `intensity` is NaN or infinite (drivers
+//! publish them for beams without a return, with `is_dense = false`) are
+//! dropped and counted in [`Frame::dropped_non_finite`], exactly as the PLY
+//! reader does (see [`crate::cloud::drop_non_finite`]); the other points
+//! keep their order and labels.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use crate::cloud::{Frame, Point};
+use crate::cloud::{drop_non_finite, Frame, Point};
 use crate::{Error, Result};
 
 /// The schema name of a ROS 2 point cloud.
@@ -136,7 +142,8 @@ impl Field {
     }
 }
 
-/// Decode one CDR `sensor_msgs/msg/PointCloud2` into a frame.
+/// Decode one CDR `sensor_msgs/msg/PointCloud2` into a frame (non-finite
+/// points dropped and counted, see the module documentation).
 pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
     let mut c = Cdr::new(data)?;
     let sec = c.u32()? as i32;
@@ -181,7 +188,7 @@ pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
             return Err(format!("a field ends beyond point_step {point_step}"));
         }
     }
-    let points = body
+    let mut points: Vec<Point> = body
         .chunks_exact(point_step.max(1))
         .take(count)
         .map(|rec| Point {
@@ -192,12 +199,14 @@ pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
             label: label.map_or(0, |f| f.read(rec) as u8),
         })
         .collect();
+    let dropped_non_finite = drop_non_finite(&mut points);
     let stamp = sec as f64 + nanosec as f64 * 1e-9;
     Ok(Frame {
         name: format!("{stamp:.6}"),
         stamp,
         points,
         has_labels: label.is_some(),
+        dropped_non_finite,
     })
 }
 
@@ -295,8 +304,10 @@ mod tests {
                 })
                 .collect(),
             has_labels: true,
+            dropped_non_finite: 0,
         };
         let data = encode_pointcloud2(&frame, "lidar");
+        assert_eq!(decode_pointcloud2(&data).unwrap().dropped_non_finite, 0);
         let back = decode_pointcloud2(&data).unwrap();
         assert_eq!(back.name, frame.name);
         assert_eq!(back.points, frame.points);
@@ -305,5 +316,34 @@ mod tests {
         for cut in [0, 3, 10, 40, data.len() - 30] {
             assert!(decode_pointcloud2(&data[..cut]).is_err(), "cut {cut}");
         }
+    }
+
+    /// A cloud with `is_dense = false`, as drivers publish it: points with a
+    /// NaN or infinite coordinate or intensity are dropped and counted; the
+    /// others keep their order and labels.
+    #[test]
+    fn non_finite_points_are_dropped_and_counted() {
+        let good = |i: u8| Point {
+            xyz: [1.0 + i as f32, 2.0, -0.5],
+            intensity: 5.0 * i as f32,
+            ring: i as u16,
+            ret: 1,
+            label: i % 7,
+        };
+        let mut points: Vec<Point> = (0..6).map(good).collect();
+        points[1].xyz = [f32::NAN; 3];
+        points[3].xyz[2] = f32::INFINITY;
+        points[4].intensity = f32::NAN;
+        let frame = Frame {
+            name: "10.500000".into(),
+            stamp: 10.5,
+            points,
+            has_labels: true,
+            dropped_non_finite: 0,
+        };
+        let back = decode_pointcloud2(&encode_pointcloud2(&frame, "lidar")).unwrap();
+        assert_eq!(back.dropped_non_finite, 3);
+        assert_eq!(back.points, vec![good(0), good(2), good(5)]);
+        assert_eq!(back.labels(), vec![0, 2, 5]);
     }
 }

@@ -16,6 +16,8 @@ pub use single_scan::{run_single_scan, run_single_scan_into};
 pub use slam::{optimize_tracked, run_slam, track_sequence, SlamOutput, Tracked};
 pub use timings::StageTimings;
 
+use std::path::Path;
+
 use nalgebra::Isometry3;
 
 use crate::classify::{Class, Rule, RuleTally};
@@ -54,6 +56,11 @@ pub struct RunOutput {
     pub rules: RuleTally,
     /// Time spent per stage.
     pub timings: StageTimings,
+    /// Input points dropped over the run because a coordinate or the
+    /// intensity was not finite (the sum of
+    /// [`Frame::dropped_non_finite`]): reported in `metrics.json`, so a run
+    /// on data with holes says how many points it never saw.
+    pub dropped_non_finite: usize,
 }
 
 /// Receives each frame's result as a run produces it, in sequence order:
@@ -115,11 +122,22 @@ pub(crate) struct RunScore {
     confusion: Confusion,
     rules: RuleTally,
     unlabelled: bool,
+    dropped_non_finite: usize,
 }
 
 impl RunScore {
-    /// Count one frame's classes against its labels.
-    pub(crate) fn add(&mut self, frame: &Frame, output: &FrameOutput) {
+    /// Count one frame's classes against its labels, and the points its
+    /// reader dropped as non-finite (with a warning naming `path`, the
+    /// frame's source, when there are any). Called once per frame.
+    pub(crate) fn add(&mut self, path: &Path, frame: &Frame, output: &FrameOutput) {
+        if frame.dropped_non_finite > 0 {
+            tracing::warn!(
+                "{}: dropped {} points with a non-finite coordinate or intensity (NaN or inf)",
+                path.display(),
+                frame.dropped_non_finite
+            );
+            self.dropped_non_finite += frame.dropped_non_finite;
+        }
         self.unlabelled |= !frame.has_labels;
         let labels = frame.points.iter().map(|p| p.label);
         self.confusion
@@ -134,6 +152,7 @@ impl RunScore {
             confusion: (!self.unlabelled).then_some(self.confusion),
             rules: self.rules,
             timings,
+            dropped_non_finite: self.dropped_non_finite,
         }
     }
 }

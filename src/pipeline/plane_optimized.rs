@@ -229,7 +229,7 @@ pub fn run_plane_optimized_into(
                 planes: summaries[k].planes,
                 candidates: summaries[k].candidates,
             };
-            score.add(frame, &output);
+            score.add(sequence.path(k), frame, &output);
             let start = Instant::now();
             sink.frame(k, frame, Some(&poses[k]), output)?;
             timings.add("write outputs", start.elapsed());

@@ -366,6 +366,7 @@ mod tests {
                     k + 1
                 ],
                 has_labels: false,
+                dropped_non_finite: 0,
             };
             let path = dir.path().join(format!("{}.ply", frame.name));
             io::write_frame(&path, &frame, PlyEncoding::BinaryLittleEndian).unwrap();

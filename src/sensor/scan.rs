@@ -209,6 +209,7 @@ mod tests {
                 point(3.0, 0.0, 0.0, 32, 1),
             ],
             has_labels: true,
+            dropped_non_finite: 0,
         };
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         assert_eq!(scan.partner(0), Some(1));

@@ -212,6 +212,7 @@ impl Simulator {
                 stamp,
                 points,
                 has_labels: true,
+                dropped_non_finite: 0,
             },
             pose,
             truth,

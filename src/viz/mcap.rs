@@ -460,6 +460,7 @@ mod tests {
                     })
                     .collect(),
                 has_labels: false,
+                dropped_non_finite: 0,
             })
             .collect();
         let poses = (0..frames.len())
