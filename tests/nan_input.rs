@@ -67,19 +67,6 @@ fn detect(input: &[&str], out: &Path) -> Output {
         .expect("run specular")
 }
 
-fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir.join("predictions"))
-        .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
-            (
-                e.file_name().into_string().unwrap(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
-}
-
 /// Every coordinate of a map PLY written by specular (binary: `float x y
 /// z`, then five `uchar`s) is finite; returns the vertex count.
 fn assert_finite_map(path: &Path) -> usize {
@@ -161,7 +148,7 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(dropped_in_metrics(&reference), 0);
-    let want = predictions(&reference);
+    let want = common::predictions(&reference);
     assert_eq!(want.len(), clean.len());
     for f in &clean {
         assert_eq!(want[&format!("{}.label", f.name)].len(), 4 * f.points.len());
@@ -171,7 +158,11 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
     let o = detect(&["--frames", frames_dir.to_str().unwrap()], &from_ply);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    assert_eq!(predictions(&from_ply), want, "NaN points change nothing");
+    assert_eq!(
+        common::predictions(&from_ply),
+        want,
+        "NaN points change nothing"
+    );
     assert_eq!(dropped_in_metrics(&from_ply), total as u64);
     for (f, h) in clean.iter().zip(&holed) {
         let n = h.points.len() - f.points.len();
@@ -196,7 +187,11 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         &from_bag,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(predictions(&from_bag), want, "the bag gives the same");
+    assert_eq!(
+        common::predictions(&from_bag),
+        want,
+        "the bag gives the same"
+    );
     assert_eq!(dropped_in_metrics(&from_bag), total as u64);
     assert!(assert_finite_map(&from_bag.join("around_corner.ply")) > 10_000);
 }

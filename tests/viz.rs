@@ -204,19 +204,6 @@ fn write_sample_bag(path: &Path) {
     w.finish().unwrap();
 }
 
-fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir.join("predictions"))
-        .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
-            (
-                e.file_name().into_string().unwrap(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn a_ros2_bag_gives_the_same_predictions_as_the_ply_frames() {
     let tmp = tempfile::tempdir().unwrap();
@@ -246,7 +233,10 @@ fn a_ros2_bag_gives_the_same_predictions_as_the_ply_frames() {
     };
     let o = run("/points");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (a, b) = (predictions(&from_ply), predictions(&from_bag));
+    let (a, b) = (
+        common::predictions(&from_ply),
+        common::predictions(&from_bag),
+    );
     assert_eq!(a.len(), 3);
     assert_eq!(a, b, "identical predictions from the bag");
     assert_eq!(

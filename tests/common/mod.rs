@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 /// The bundled real sample (always present).
 pub fn sample_dir() -> PathBuf {
@@ -29,4 +30,18 @@ pub fn shared_frames() -> Option<PathBuf> {
         eprintln!("note: {} not found; test skipped", dir.display());
         None
     }
+}
+
+/// A run's predictions (`OUT/predictions/*.label`), by file name, as bytes.
+pub fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir.join("predictions"))
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().into_string().unwrap(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
 }
