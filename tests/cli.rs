@@ -5,6 +5,9 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
+use specular::classify::rule::RULES;
+use specular::classify::Class;
+
 fn specular(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_specular"))
         .args(args)
@@ -42,13 +45,17 @@ fn detect_sample(out: &Path, extra: &[&str]) -> Output {
 fn detect_then_eval_on_the_sample() {
     let sample = common::sample_dir();
     let out = tempfile::tempdir().unwrap();
-    let o = detect_sample(out.path(), &["--method", "single-scan", "--timings"]);
+    let o = detect_sample(
+        out.path(),
+        &["--method", "single-scan", "--timings", "--rules"],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         stdout.contains("accuracy") && stdout.contains("classify"),
         "{stdout}"
     );
+    let mut rule_tally = std::collections::BTreeMap::new();
     for entry in specular::io::list_frames(&sample.join("frames")).unwrap() {
         let frame = specular::io::read_frame(&entry.path).unwrap();
         let labels = specular::io::read_labels(
@@ -57,6 +64,20 @@ fn detect_then_eval_on_the_sample() {
         .unwrap();
         assert_eq!(labels.len(), frame.points.len());
         assert!(labels.iter().all(|l| [0, 1, 2, 5, 6].contains(l)));
+        // --rules: the deciding rule of every point, beside its label.
+        let rules =
+            specular::io::read_labels(&out.path().join(format!("predictions/{}.rule", entry.name)))
+                .unwrap();
+        assert_eq!(rules.len(), frame.points.len());
+        for (rule, label) in rules.iter().zip(&labels) {
+            *rule_tally
+                .entry(format!(
+                    "{}/{}",
+                    RULES[*rule as usize].name(),
+                    Class::from_id(*label).name()
+                ))
+                .or_insert(0u64) += 1;
+        }
     }
     assert!(out.path().join("config.toml").exists());
     // metrics.json: the whole confusion matrix by label id, and which rule
@@ -76,6 +97,10 @@ fn detect_then_eval_on_the_sample() {
     let points = metrics["points"].as_u64().unwrap() + metrics["ignored"].as_u64().unwrap();
     assert_eq!(total(&metrics["confusion"]["by_label"]), points);
     assert_eq!(total(&metrics["rules"]), points);
+    // The rule files tally exactly as metrics.json does.
+    for (key, n) in &rule_tally {
+        assert_eq!(total(&metrics["rules"][key]), *n, "{key}");
+    }
     assert!(
         metrics["rules"].get("no-pane/normal").is_some(),
         "{}",

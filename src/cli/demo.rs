@@ -63,6 +63,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         &sequence,
         &config,
         Some(&visual(&args, sim_title.clone())),
+        false,
     )
     .context("plane-optimized on the simulated scene")?;
     let confusion = run.confusion;
@@ -96,6 +97,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         &sequence,
         &config,
         Some(&visual(&args, real_title.clone())),
+        false,
     )
     .with_context(|| format!("running the demo on {}", sample.display()))?;
     let confusion = run.confusion;

@@ -52,6 +52,11 @@ pub struct DetectArgs {
     /// around_corner.ply): no map.ply, recording, plots or report.
     #[arg(long)]
     pub lean: bool,
+    /// Also write, beside each `predictions/FRAME.label`, `FRAME.rule`: the
+    /// id of the rule that decided each point (see `specular::classify::Rule`;
+    /// same format as the labels), to see why a point got its class.
+    #[arg(long)]
+    pub rules: bool,
 }
 
 /// Run `detect`.
@@ -82,7 +87,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
         mcap: !args.no_mcap,
         title: format!("specular detect: {}", input.display()),
     });
-    let result = detect_into(&args.out, &sequence, &config, visual.as_ref())?;
+    let result = detect_into(&args.out, &sequence, &config, visual.as_ref(), args.rules)?;
     let mut timings = result.run.timings.clone();
     timings.wall = wall.elapsed();
     println!(
@@ -172,12 +177,14 @@ pub(crate) fn detect_into(
     sequence: &Sequence,
     config: &Config,
     visual: Option<&VisualOptions>,
+    rules: bool,
 ) -> Result<Detected> {
     let map_method = config.method == Method::PlaneOptimized;
     let options = OutputOptions {
         around_corner: map_method,
         visual: visual.is_some() && sequence.poses.is_some(),
         mcap: visual.is_some_and(|v| v.mcap),
+        rules,
     };
     let mut writer = RunWriter::new(out, config, options)?;
     let (mut run, map) = match config.method {

@@ -29,6 +29,10 @@ pub(crate) struct OutputOptions {
     pub visual: bool,
     /// `run.mcap` (with `visual`).
     pub mcap: bool,
+    /// Beside each `.label` file, a `.rule` file: per point, the id of the
+    /// rule that decided its class (`specular::classify::Rule`), in the
+    /// same format (little-endian u32 per point).
+    pub rules: bool,
 }
 
 /// The [`FrameSink`] of the command-line tool: writes each frame's
@@ -137,6 +141,10 @@ impl FrameSink for RunWriter {
     ) -> specular::Result<()> {
         let ids: Vec<u8> = output.classes.iter().map(|c| c.id()).collect();
         io::write_labels(&self.partial.join(format!("{}.label", output.name)), &ids)?;
+        if self.options.rules {
+            let rules: Vec<u8> = output.rules.iter().map(|r| r.id()).collect();
+            io::write_labels(&self.partial.join(format!("{}.rule", output.name)), &rules)?;
+        }
         if let Some(pose) = pose {
             self.trajectory
                 .push([pose.translation.vector.x, pose.translation.vector.y]);
