@@ -210,27 +210,54 @@ impl BeamPlanes<'_> {
     /// passed one pane and met a second before its return (glass behind
     /// glass, glass then mirror).
     pub fn crosses_between(&self, p: &Point3<f64>, skip: usize, lo: f64, hi: f64) -> bool {
+        self.crossings_between(p, skip, lo, hi).next().is_some()
+    }
+
+    /// The nearest plane other than `skip` that the beam towards `p` crosses
+    /// inside its boundary strictly between ranges `lo` and `hi`, with the
+    /// range of the crossing.
+    pub fn nearest_between(
+        &self,
+        p: &Point3<f64>,
+        skip: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Option<(usize, f64)> {
+        self.crossings_between(p, skip, lo, hi)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// Every crossing of the beam towards `p` with a plane other than `skip`
+    /// inside its boundary strictly between ranges `lo` and `hi`.
+    fn crossings_between<'s>(
+        &'s self,
+        p: &Point3<f64>,
+        skip: usize,
+        lo: f64,
+        hi: f64,
+    ) -> impl Iterator<Item = (usize, f64)> + 's {
         let range = p.coords.norm();
-        if !(range > 0.0) || !(hi > lo) {
-            return false;
-        }
-        let dir: Vector3<f64> = p.coords / range;
+        let valid = range > 0.0 && hi > lo;
+        let dir: Vector3<f64> = if valid {
+            p.coords / range
+        } else {
+            Vector3::zeros()
+        };
         let origin = Point3::origin();
-        self.planes.iter().enumerate().any(|(k, bp)| {
-            if k == skip {
-                return false;
-            }
-            let Some(t) = crossing_along(&bp.plane, &dir) else {
-                return false;
-            };
-            if !(t > lo && t < hi) {
-                return false;
-            }
-            let uv = bp.chart.to_2d(&(origin + dir * t));
-            let (a, b) = self.extents.get(k).copied().unwrap_or((uv, uv));
-            let boxed = uv.x >= a.x && uv.x <= b.x && uv.y >= a.y && uv.y <= b.y;
-            boxed && bp.bounds_2d(&uv, self.margin)
-        })
+        self.planes
+            .iter()
+            .enumerate()
+            .filter(move |(k, _)| valid && *k != skip)
+            .filter_map(move |(k, bp)| {
+                let t = crossing_along(&bp.plane, &dir)?;
+                if !(t > lo && t < hi) {
+                    return None;
+                }
+                let uv = bp.chart.to_2d(&(origin + dir * t));
+                let (a, b) = self.extents.get(k).copied().unwrap_or((uv, uv));
+                let boxed = uv.x >= a.x && uv.x <= b.x && uv.y >= a.y && uv.y <= b.y;
+                (boxed && bp.bounds_2d(&uv, self.margin)).then_some((k, t))
+            })
     }
 }
 

@@ -63,6 +63,12 @@ pub struct EvidenceParams {
     pub echo_reach: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
+    /// A surface echo votes "glass" only if the surface around it (its
+    /// neighbours in the scan) is within this angle of the plane, degrees
+    /// (0: no test). Where another pane or a wall cuts the plane, its echoes
+    /// lie on the plane along the line of the cut; without this test they
+    /// grow a phantom pane around that line.
+    pub echo_normal_max_deg: f64,
 }
 
 impl Default for EvidenceParams {
@@ -80,6 +86,7 @@ impl Default for EvidenceParams {
             min_echo_fraction: 0.0,
             echo_reach: 0.0,
             max_cells: 4_000_000,
+            echo_normal_max_deg: 0.0,
         }
     }
 }
@@ -304,6 +311,17 @@ fn vote_frame(
 ) -> Votes {
     let origin = Point3::origin();
     let cos_peak = p.peak_angle_deg.to_radians().cos();
+    let echo_normal_cos =
+        (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
+    // Whether the surface around point `i` crosses the plane rather than
+    // lying on it (unknown surfaces do not).
+    let crosses = |i: usize| {
+        echo_normal_cos.is_some_and(|c| {
+            f.scan
+                .local_normal(f.frame, i)
+                .is_some_and(|n| n.dot(&plane.plane.normal).abs() < c)
+        })
+    };
     let mut votes = Votes::default();
     // A point on the sensor's side of the plane lies at least its distance
     // from the plane in front of the crossing along its beam (|r - t| >=
@@ -342,7 +360,7 @@ fn vote_frame(
         } else if s.abs() <= p.surface_band {
             match f.scan.partner(i) {
                 // A surface echo with a return behind the plane: glass.
-                Some(j) if f.frame.points[j].range() - t > p.behind => {
+                Some(j) if f.frame.points[j].range() - t > p.behind && !crosses(i) => {
                     grid.vote_echo(&uv);
                     votes.glass_echo_intensity.push(pt.intensity);
                 }
@@ -363,6 +381,67 @@ fn vote_frame(
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// A pane at x = 5 seen head-on (glass echo, and a return from a wall
+    /// at x = 7 behind it) cuts a landmark at y ≈ -0.5 along a vertical
+    /// line: the pane's echoes on that line lie on the landmark's plane,
+    /// but their surface crosses it. They vote glass for the landmark
+    /// (a phantom pane) only with the normal test off.
+    #[test]
+    fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
+        use crate::geometry::Plane;
+        use crate::sensor::SensorModel;
+        use nalgebra::Vector3;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let mut points = Vec::new();
+        for ring in 0..sensor.rings() {
+            for column in 0..sensor.columns {
+                let d = sensor.beam_direction(ring, column);
+                let az = d.y.atan2(d.x).to_degrees();
+                if !(-20.0..=5.0).contains(&az) || d.z.abs() > 0.3 {
+                    continue;
+                }
+                for (x, intensity, ret) in [(5.0, 10.0f32, 1u8), (7.0, 100.0, 2)] {
+                    let p = d * (x / d.x);
+                    points.push(crate::cloud::Point {
+                        xyz: [p.x as f32, p.y as f32, p.z as f32],
+                        intensity,
+                        ring: ring as u16,
+                        ret,
+                        label: 0,
+                    });
+                }
+            }
+        }
+        let frame = Frame {
+            name: "crossing".into(),
+            points,
+            ..Frame::default()
+        };
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        // The landmark's plane holds one column's beams exactly.
+        let column = sensor.column_of(1.0, -0.1);
+        let az = sensor.column_azimuth_deg(column).to_radians();
+        let y0 = 5.0 * az.tan();
+        let plane = Plane::new(Vector3::new(0.0, 1.0, 0.0), -y0).unwrap();
+        let corners = [(4.0, -1.0), (6.0, -1.0), (6.0, 1.0), (4.0, 1.0)];
+        let landmark =
+            BoundedPlane::from_points(plane, corners.iter().map(|&(x, z)| Point3::new(x, y0, z)));
+        let f = EvidenceFrame {
+            frame: &frame,
+            scan: &scan,
+            pose: Isometry3::identity(),
+        };
+        let off = EvidenceParams::default();
+        let on = EvidenceParams {
+            echo_normal_max_deg: 45.0,
+            ..off
+        };
+        let without = gather_evidence(&landmark, &[f], &off).unwrap();
+        assert!(without.glass_echo_intensity.is_some());
+        let with = gather_evidence(&landmark, &[f], &on).unwrap();
+        assert_eq!(with.glass_echo_intensity, None);
+    }
 
     /// The median of the whole multiset, as the in-memory gathering took it.
     fn median_of_all(v: &mut [f32]) -> Option<f64> {

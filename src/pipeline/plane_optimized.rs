@@ -562,7 +562,14 @@ impl<'a> FrameViews<'a> {
                     let strength = echo_strength(pt.intensity, range, exponent, cos);
                     out[h.plane].0.add(strength);
                     let mirrored = sensor_planes[h.plane].plane.mirror(&pos);
-                    if view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free {
+                    // A glass echo of a second pane behind this one is
+                    // transmitted by this one, but its strength is that
+                    // pane's echo, not a surface's: no anchor.
+                    let on_other_pane =
+                        beams.crosses_between(&pos, h.plane, range - glass, range + glass);
+                    if !on_other_pane
+                        && view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free
+                    {
                         out[h.plane].1.add(strength);
                     }
                 }

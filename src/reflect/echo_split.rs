@@ -59,6 +59,18 @@ pub struct EchoSplitParams {
     pub mirror_max_anchor_share: f64,
     /// Points behind a landmark needed to call it a mirror.
     pub mirror_min_behind: u64,
+    /// A landmark whose echoes behind it fall in two groups at least
+    /// `min_separation` apart is glass, never a mirror, whatever its
+    /// anchors: a mirror transmits nothing, so everything behind it is one
+    /// population of reflections, while glass returns weak reflections and
+    /// strong transmitted echoes. Anchors alone fail where the scene is its
+    /// own mirror image (a glass door across a corridor: no mirror image
+    /// ever lands in free space).
+    pub mirror_needs_one_group: bool,
+    /// With fewer than `min_anchors` anchors, orient a split by physics
+    /// alone when `reflection_is_weaker`: the weak group is the reflections
+    /// (anchors that exist must still agree).
+    pub orient_without_anchors: bool,
 }
 
 impl Default for EchoSplitParams {
@@ -74,6 +86,8 @@ impl Default for EchoSplitParams {
             reflection_is_weaker: false,
             mirror_max_anchor_share: 0.0,
             mirror_min_behind: 1000,
+            mirror_needs_one_group: false,
+            orient_without_anchors: false,
         }
     }
 }
@@ -175,9 +189,14 @@ fn centre(bin: usize) -> f64 {
 /// space seen free).
 pub fn is_mirror(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitParams) -> bool {
     let n = all.total();
+    let two_groups = || {
+        all.otsu()
+            .is_some_and(|(_, m0, m1)| (m1 - m0).abs() >= p.min_separation)
+    };
     p.mirror_max_anchor_share > 0.0
         && n >= p.mirror_min_behind
         && (anchors.total() as f64) <= p.mirror_max_anchor_share * n as f64
+        && !(p.mirror_needs_one_group && two_groups())
 }
 
 /// A landmark's learned split between transmitted and reflected echoes.
@@ -206,10 +225,15 @@ impl EchoSplit {
             return None;
         }
         let n = anchors.total();
-        if n < p.min_anchors as u64 {
+        let by_physics = p.orient_without_anchors && p.reflection_is_weaker;
+        if n < p.min_anchors as u64 && !by_physics {
             return None;
         }
-        let strong = anchors.above(threshold) as f64 / n as f64;
+        let strong = if n < p.min_anchors as u64 {
+            1.0
+        } else {
+            anchors.above(threshold) as f64 / n as f64
+        };
         let weak_is_reflection = if strong >= p.min_anchor_agreement {
             true
         } else if 1.0 - strong >= p.min_anchor_agreement && !p.reflection_is_weaker {
@@ -310,5 +334,40 @@ mod tests {
         assert!(!is_mirror(&few, &EchoHistogram::default(), &p));
         let off = EchoSplitParams::default();
         assert!(!is_mirror(&all, &EchoHistogram::default(), &off));
+    }
+
+    /// Glass behind which the scene is its own mirror image (a door across
+    /// a corridor) has no anchors at all: its two echo groups still make it
+    /// glass, not a mirror, and orient by physics (reflections weaker) when
+    /// switched on; one group with no anchors stays a mirror.
+    #[test]
+    fn without_anchors_two_groups_are_glass_oriented_by_physics() {
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let weak: Vec<f64> = (0..600).map(|_| 2.0 + 0.3 * rng.unit()).collect();
+        let strong: Vec<f64> = (0..900).map(|_| 3.5 + 0.4 * rng.unit()).collect();
+        let two = histogram(weak.iter().chain(&strong).copied());
+        let one = histogram(strong.iter().copied());
+        let none = EchoHistogram::default();
+        let old = EchoSplitParams {
+            enabled: true,
+            reflection_is_weaker: true,
+            mirror_max_anchor_share: 0.002,
+            mirror_min_behind: 500,
+            ..EchoSplitParams::default()
+        };
+        let new = EchoSplitParams {
+            mirror_needs_one_group: true,
+            orient_without_anchors: true,
+            ..old
+        };
+        assert!(is_mirror(&two, &none, &old));
+        assert!(!is_mirror(&two, &none, &new));
+        assert!(is_mirror(&one, &none, &new));
+        assert_eq!(EchoSplit::fit(&two, &none, &old), None);
+        let split = EchoSplit::fit(&two, &none, &new).expect("a split by physics");
+        assert!(split.weak_is_reflection);
+        // Anchors that exist must still agree.
+        let weak_anchors = histogram(weak.iter().take(100).copied());
+        assert_eq!(EchoSplit::fit(&two, &weak_anchors, &new), None);
     }
 }

@@ -1,6 +1,8 @@
 //! The organized scan: a frame's points on the sensor's ring × column grid,
 //! with both returns of each beam paired (in the sensor frame).
 
+use nalgebra::Vector3;
+
 use crate::cloud::Frame;
 use crate::sensor::SensorModel;
 use crate::{Error, Result};
@@ -38,6 +40,29 @@ impl OrganizedScan {
     pub fn incidence_cos(&self, frame: &Frame, point: usize) -> Option<f64> {
         let p = frame.points.get(point)?.position();
         let r0 = p.coords.norm();
+        let n = self.neighbour_cross(frame, point)?;
+        let norm = n.norm();
+        if !(norm > 1e-12) || !(r0 > 0.0) {
+            return None;
+        }
+        Some((n.dot(&p.coords) / (norm * r0)).abs())
+    }
+
+    /// The unit normal (either sign) of the surface around `point`, from its
+    /// neighbours in the scan (the returns of the adjacent columns and rings
+    /// nearest to its range, within a tenth of it plus 0.2 m); `None` where
+    /// they do not span a surface.
+    pub fn local_normal(&self, frame: &Frame, point: usize) -> Option<Vector3<f64>> {
+        let n = self.neighbour_cross(frame, point)?;
+        let norm = n.norm();
+        (norm > 1e-12).then(|| n / norm)
+    }
+
+    /// The cross product of the neighbour differences across columns and
+    /// rings around `point` (unnormalised).
+    fn neighbour_cross(&self, frame: &Frame, point: usize) -> Option<Vector3<f64>> {
+        let p = frame.points.get(point)?.position();
+        let r0 = p.coords.norm();
         let (ring, col) = self.ring_column(self.cell_of(point));
         let near = |ring: isize, col: isize| {
             if ring < 0 || ring as usize >= self.rings {
@@ -58,12 +83,7 @@ impl OrganizedScan {
         let (r, c) = (ring as isize, col as isize);
         let across = near(r, c + 1).unwrap_or(p) - near(r, c - 1).unwrap_or(p);
         let up = near(r + 1, c).unwrap_or(p) - near(r - 1, c).unwrap_or(p);
-        let n = across.cross(&up);
-        let norm = n.norm();
-        if !(norm > 1e-12) || !(r0 > 0.0) {
-            return None;
-        }
-        Some((n.dot(&p.coords) / (norm * r0)).abs())
+        Some(across.cross(&up))
     }
 
     /// Organize `frame` on `sensor`'s grid. Errors (naming the frame) when a

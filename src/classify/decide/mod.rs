@@ -27,7 +27,9 @@
 //!      Obstacle;
 //!    - echo strength: where the landmark's echoes behind it fall in two
 //!      groups, the weak one reflected and the strong one transmitted (or
-//!      the other way round, as its anchors say);
+//!      the other way round, as its anchors say); a beam that met a second
+//!      pane is decided pane by pane (weak at the first: reflected there;
+//!      strong: through it, and the next pane decides);
 //!    - seen surface: a point measured on a surface seen directly from
 //!      elsewhere in the sequence is real (an Obstacle);
 //!    - support: if the mirrored point lands on an observed surface (a return
@@ -52,6 +54,7 @@ use super::rule::{Decisions, Rule};
 use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
+use crate::reflect::echo_split::EchoSplit;
 use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -131,6 +134,12 @@ pub struct DecisionParams {
     /// door, a gap the pane's extent covers) and the point is Normal, m
     /// (0: always an Obstacle).
     pub seen_surface_echo_reach: f64,
+    /// The first pane's echo split also decides beams that met a second
+    /// pane behind it: a reflection off the first pane is weak whatever
+    /// lies beyond, and a transmitted echo stays strong through uncoated
+    /// glass (glass doors and partitions seen through one another), while
+    /// the geometric tests say nothing past a second pane.
+    pub echo_strength_past_second_pane: bool,
 }
 
 impl Default for DecisionParams {
@@ -157,6 +166,7 @@ impl Default for DecisionParams {
             space_clearance_ratio: 0.0,
             seen_surface_test: false,
             seen_surface_echo_reach: 0.0,
+            echo_strength_past_second_pane: false,
         }
     }
 }
@@ -465,14 +475,22 @@ pub fn decide_with_hits(
         // a reflection off glass is far weaker than a transmitted echo, which
         // tells floors and ceilings behind glass (their own mirror images)
         // from their reflections.
-        if let Some(reflected) = bp.echo_split.filter(|_| single_pane).and_then(|split| {
+        let strength = |split: &EchoSplit| {
             let cos = if split.incidence_correction {
                 scan.incidence_cos(frame, i).unwrap_or(1.0)
             } else {
                 1.0
             };
             split.reflected(frame.points[i].intensity, p.coords.norm(), cos)
-        }) {
+        };
+        let verdict = if single_pane {
+            bp.echo_split.and_then(|s| strength(&s))
+        } else if params.echo_strength_past_second_pane {
+            past_second_pane(bounded, &one_sided, plane as usize, &p, t, params, strength)
+        } else {
+            None
+        };
+        if let Some(reflected) = verdict {
             classes[i] = if reflected {
                 Class::Reflection
             } else {
@@ -540,6 +558,46 @@ pub fn decide_with_hits(
         }
     }
     Decisions { classes, rules }
+}
+
+/// Echo strength for a beam that crossed pane `first` (at range `t`) and
+/// then a second pane before its return at `p`, recursively: a weak echo by
+/// the first pane's split is a reflection off it; a strong one crossed it,
+/// and the second pane decides as if it were the first (behind a mirror
+/// nothing is real; its own split, or the next pane's, tells a reflection
+/// off it from an echo through it). `None` where a pane on the way has no
+/// split, or the strength falls in a split's undecided band.
+fn past_second_pane(
+    bounded: &[BoundedPlane],
+    beams: &BeamPlanes<'_>,
+    first: usize,
+    p: &Point3<f64>,
+    t: f64,
+    params: &DecisionParams,
+    strength: impl Fn(&EchoSplit) -> Option<bool>,
+) -> Option<bool> {
+    let range = p.coords.norm();
+    let (mut pane, mut at) = (first, t);
+    // At most as many panes as the map has: each step moves farther along.
+    for _ in 0..bounded.len() {
+        if strength(&bounded[pane].echo_split?)? {
+            return Some(true);
+        }
+        let Some((next, t_next)) = beams.nearest_between(
+            p,
+            pane,
+            at + params.glass_distance,
+            range - params.behind_distance,
+        ) else {
+            // Transmitted by the last pane before the return: real.
+            return Some(false);
+        };
+        if bounded[next].mirror {
+            return Some(true);
+        }
+        (pane, at) = (next, t_next);
+    }
+    None
 }
 
 #[cfg(test)]

@@ -307,3 +307,55 @@ fn beams_through_a_second_pane_skip_the_one_pane_tests() {
         [Class::Obstacle]
     );
 }
+
+/// A split for the synthetic panes: at 8 m `log10(I r²)` is 1.8 for
+/// I = 1 and 3.8 for I = 100.
+fn split() -> crate::reflect::EchoSplit {
+    crate::reflect::EchoSplit {
+        threshold: 2.8,
+        band: 0.1,
+        range_exponent: 2.0,
+        incidence_correction: false,
+        weak_is_reflection: true,
+    }
+}
+
+/// Past a second pane the echo strength still decides, pane by pane: weak
+/// by the first pane's split is a reflection off it; strong crossed it,
+/// and the second pane decides (its own split, or a mirror reflects).
+/// Switched off, such beams are left undecided.
+#[test]
+fn past_a_second_pane_the_echo_strength_decides_pane_by_pane() {
+    let mut planes = pane();
+    let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
+    let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
+    planes.push(BoundedPlane::from_points(
+        second,
+        corners.iter().map(|&(y, z)| Point3::new(6.0, y, z)),
+    ));
+    planes[0].echo_split = Some(split());
+    planes[1].echo_split = Some(split());
+    let points = [[8.0f32, 0.2, 0.3]];
+    let on = DecisionParams {
+        echo_strength_past_second_pane: true,
+        ..rule_only(false)
+    };
+    let off = rule_only(false);
+    assert_eq!(classify(&points, 1.0, &planes, &on), [Class::Reflection]);
+    assert_eq!(classify(&points, 100.0, &planes, &on), [Class::Obstacle]);
+    assert_eq!(
+        classify(&points, 100.0, &planes, &off),
+        [Class::Unclassified]
+    );
+    assert_eq!(classify(&points, 1.0, &planes, &off), [Class::Unclassified]);
+    // Through the first pane into a mirror: nothing behind it is real.
+    planes[1].mirror = true;
+    planes[1].echo_split = None;
+    assert_eq!(classify(&points, 100.0, &planes, &on), [Class::Reflection]);
+    // A second pane without a split leaves a strong echo to other tests.
+    planes[1].mirror = false;
+    assert_eq!(
+        classify(&points, 100.0, &planes, &on),
+        [Class::Unclassified]
+    );
+}
