@@ -69,6 +69,11 @@ pub struct EvidenceParams {
     /// lie on the plane along the line of the cut; without this test they
     /// grow a phantom pane around that line.
     pub echo_normal_max_deg: f64,
+    /// An echo on the plane that lies on another reflective landmark too
+    /// (within its surface band, inside its boundary) votes only for the
+    /// one its beam meets nearer normal incidence: glass echoes peak there,
+    /// so where two panes cut each other the echoes are the facing pane's.
+    pub echo_owner_test: bool,
 }
 
 impl Default for EvidenceParams {
@@ -87,6 +92,7 @@ impl Default for EvidenceParams {
             echo_reach: 0.0,
             max_cells: 4_000_000,
             echo_normal_max_deg: 0.0,
+            echo_owner_test: false,
         }
     }
 }
@@ -126,6 +132,8 @@ pub fn gather_evidence(
 #[derive(Debug, Clone)]
 pub struct EvidenceGatherer {
     landmark: BoundedPlane,
+    /// The other reflective landmarks (world frame), for the owner test.
+    others: Vec<BoundedPlane>,
     empty: EvidenceGrid,
     params: EvidenceParams,
 }
@@ -173,17 +181,35 @@ impl EvidenceGatherer {
         empty.echo_reach = params.echo_reach;
         Some(Self {
             landmark: landmark.clone(),
+            others: Vec::new(),
             empty,
             params: *params,
         })
     }
 
+    /// The same gatherer aware of the other reflective landmarks (world
+    /// frame) that an echo on this one's plane may belong to
+    /// ([`EvidenceParams::echo_owner_test`]).
+    pub fn with_others(mut self, others: &[BoundedPlane]) -> Self {
+        if self.params.echo_owner_test {
+            self.others = others.to_vec();
+        }
+        self
+    }
+
     /// One frame's votes.
     pub fn votes(&self, f: &EvidenceFrame<'_>) -> FrameVotes {
         let mut grid = self.empty.empty_like();
+        let to_sensor = f.pose.inverse();
+        let others: Vec<BoundedPlane> = self
+            .others
+            .iter()
+            .map(|o| o.transformed(&to_sensor))
+            .collect();
         let votes = vote_frame(
             &mut grid,
-            &self.landmark.transformed(&f.pose.inverse()),
+            &self.landmark.transformed(&to_sensor),
+            &others,
             f,
             &self.params,
         );
@@ -306,6 +332,7 @@ fn from_total_order_key(key: i32) -> f32 {
 fn vote_frame(
     grid: &mut EvidenceGrid,
     plane: &BoundedPlane,
+    others: &[BoundedPlane],
     f: &EvidenceFrame<'_>,
     p: &EvidenceParams,
 ) -> Votes {
@@ -313,6 +340,16 @@ fn vote_frame(
     let cos_peak = p.peak_angle_deg.to_radians().cos();
     let echo_normal_cos =
         (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
+    // Whether the echo at `x` (beam `dir`) lies on another landmark that
+    // its beam meets nearer normal incidence.
+    let owned_by_other = |x: &Point3<f64>, dir: &nalgebra::Vector3<f64>| {
+        let here = plane.plane.normal.dot(dir).abs();
+        others.iter().any(|o| {
+            o.plane.signed_distance(x).abs() <= p.surface_band
+                && o.plane.normal.dot(dir).abs() > here
+                && o.bounds_2d(&o.chart.to_2d(x), 0.0)
+        })
+    };
     // Whether the surface around point `i` crosses the plane rather than
     // lying on it (unknown surfaces do not).
     let crosses = |i: usize| {
@@ -360,7 +397,11 @@ fn vote_frame(
         } else if s.abs() <= p.surface_band {
             match f.scan.partner(i) {
                 // A surface echo with a return behind the plane: glass.
-                Some(j) if f.frame.points[j].range() - t > p.behind && !crosses(i) => {
+                Some(j)
+                    if f.frame.points[j].range() - t > p.behind
+                        && !crosses(i)
+                        && !owned_by_other(&x, &dir) =>
+                {
                     grid.vote_echo(&uv);
                     votes.glass_echo_intensity.push(pt.intensity);
                 }
@@ -386,7 +427,7 @@ mod tests {
     /// at x = 7 behind it) cuts a landmark at y ≈ -0.5 along a vertical
     /// line: the pane's echoes on that line lie on the landmark's plane,
     /// but their surface crosses it. They vote glass for the landmark
-    /// (a phantom pane) only with the normal test off.
+    /// (a phantom pane) only with both the normal and the owner test off.
     #[test]
     fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
         use crate::geometry::Plane;
@@ -441,6 +482,29 @@ mod tests {
         assert!(without.glass_echo_intensity.is_some());
         let with = gather_evidence(&landmark, &[f], &on).unwrap();
         assert_eq!(with.glass_echo_intensity, None);
+        // The owner test: the pane at x = 5 is a landmark too, and the beams
+        // meet it nearer normal incidence, so the echoes are its own.
+        let pane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let pane = BoundedPlane::from_points(
+            pane,
+            [(-3.0, -2.0), (1.0, -2.0), (1.0, 2.0), (-3.0, 2.0)]
+                .iter()
+                .map(|&(y, z)| Point3::new(5.0, y, z)),
+        );
+        let owner = EvidenceParams {
+            echo_owner_test: true,
+            ..off
+        };
+        let votes = |params: &EvidenceParams| {
+            let gatherer = EvidenceGatherer::new(&landmark, params)
+                .unwrap()
+                .with_others(std::slice::from_ref(&pane));
+            let mut total = gatherer.total();
+            total.add(gatherer.votes(&f));
+            total.finish().glass_echo_intensity
+        };
+        assert!(votes(&off).is_some());
+        assert_eq!(votes(&owner), None);
     }
 
     /// The median of the whole multiset, as the in-memory gathering took it.

@@ -259,7 +259,16 @@ fn gather_evidence(
     let poses = sequence.poses.as_deref().unwrap_or_default();
     let gatherers: Vec<Option<EvidenceGatherer>> = planes
         .iter()
-        .map(|bp| EvidenceGatherer::new(bp, &config.map.evidence))
+        .enumerate()
+        .map(|(k, bp)| {
+            let others: Vec<BoundedPlane> = planes
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, o)| o.clone())
+                .collect();
+            EvidenceGatherer::new(bp, &config.map.evidence).map(|g| g.with_others(&others))
+        })
         .collect();
     let mut totals: Vec<Option<EvidenceTotal>> = gatherers
         .iter()
