@@ -308,6 +308,24 @@ impl EvidenceGrid {
         }
     }
 
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.cols * self.rows
+    }
+
+    /// Whether the grid has no cells.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Decide cell `index` as an opening, whatever its votes (after
+    /// [`finalize`](Self::finalize); out-of-range indices are ignored).
+    pub fn set_open(&mut self, index: usize) {
+        if let Some(s) = self.states.get_mut(index) {
+            *s = Surface::Open;
+        }
+    }
+
     /// The state of cell `index`: the majority of the votes over the cell
     /// and its 8 neighbours, when there are at least `min_votes`.
     pub fn cell_state(&self, index: usize) -> Surface {

@@ -74,6 +74,12 @@ pub struct EvidenceParams {
     /// one its beam meets nearer normal incidence: glass echoes peak there,
     /// so where two panes cut each other the echoes are the facing pane's.
     pub echo_owner_test: bool,
+    /// Where the sensor's path crosses the landmark's plane, the plane is
+    /// open: cells within this horizontal distance of the crossing, from
+    /// the ground up to this far above it, are an opening (a door the
+    /// sensor passed through, not glass), m (0: off). Assumes the world's
+    /// z axis points up.
+    pub crossing_radius: f64,
 }
 
 impl Default for EvidenceParams {
@@ -93,6 +99,7 @@ impl Default for EvidenceParams {
             max_cells: 4_000_000,
             echo_normal_max_deg: 0.0,
             echo_owner_test: false,
+            crossing_radius: 0.0,
         }
     }
 }
@@ -276,6 +283,60 @@ impl EvidenceTotal {
     }
 }
 
+/// Mark as an opening the cells of `landmark`'s decided evidence where the
+/// sensor path `path` (positions, world frame, in order) crosses its plane:
+/// within `radius` horizontally of a crossing and below `radius` above it.
+/// The sensor passed through there, so whatever the votes say, it is no
+/// glass (a glass door's open leaf, which the closed leaf's echoes would
+/// otherwise keep inside the pane). Returns the number of crossings used.
+pub fn open_where_crossed(landmark: &mut BoundedPlane, path: &[Point3<f64>], radius: f64) -> usize {
+    if radius <= 0.0 {
+        return 0;
+    }
+    let Some(grid) = landmark.evidence.as_deref() else {
+        return 0;
+    };
+    let crossings: Vec<Point3<f64>> = path_crossings(landmark, path)
+        .filter(|x| grid.index(&landmark.chart.to_2d(x)).is_some())
+        .collect();
+    if crossings.is_empty() {
+        return 0;
+    }
+    let mut grid = grid.clone();
+    for k in 0..grid.len() {
+        let c = landmark.chart.to_3d(&grid.centre(k));
+        let open = crossings.iter().any(|x| {
+            let (dx, dy) = (c.x - x.x, c.y - x.y);
+            dx * dx + dy * dy <= radius * radius && c.z <= x.z + radius
+        });
+        if open {
+            grid.set_open(k);
+        }
+    }
+    landmark.evidence = Some(std::sync::Arc::new(grid));
+    crossings.len()
+}
+
+/// Where the sensor path `path` (positions, world frame, in order) crosses
+/// `landmark`'s plane.
+pub fn path_crossings<'a>(
+    landmark: &'a BoundedPlane,
+    path: &'a [Point3<f64>],
+) -> impl Iterator<Item = Point3<f64>> + 'a {
+    let plane = landmark.plane;
+    path.windows(2).filter_map(move |w| {
+        let (a, b) = (plane.signed_distance(&w[0]), plane.signed_distance(&w[1]));
+        (a * b < 0.0).then(|| w[0] + (w[1] - w[0]) * (a / (a - b)))
+    })
+}
+
+/// Whether the sensor path passed through `landmark` inside its convex
+/// boundary: then it has an opening, and it is no mirror.
+pub fn passed_through(landmark: &BoundedPlane, path: &[Point3<f64>]) -> bool {
+    path_crossings(landmark, path)
+        .any(|x| landmark.boundary.signed_distance(&landmark.chart.to_2d(&x)) <= 0.0)
+}
+
 /// Votes of one frame that need the whole sequence to be weighed.
 #[derive(Debug, Default)]
 struct Votes {
@@ -423,17 +484,10 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// A pane at x = 5 seen head-on (glass echo, and a return from a wall
-    /// at x = 7 behind it) cuts a landmark at y ≈ -0.5 along a vertical
-    /// line: the pane's echoes on that line lie on the landmark's plane,
-    /// but their surface crosses it. They vote glass for the landmark
-    /// (a phantom pane) only with both the normal and the owner test off.
-    #[test]
-    fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
-        use crate::geometry::Plane;
-        use crate::sensor::SensorModel;
-        use nalgebra::Vector3;
-        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    /// One scan of a pane at x = 5 seen head-on (a weak glass echo per beam)
+    /// with a wall at x = 7 behind it (the second return), over azimuths
+    /// -20..5 degrees and elevations up to about 17 degrees.
+    fn pane_frame(sensor: &crate::sensor::SensorModel) -> Frame {
         let mut points = Vec::new();
         for ring in 0..sensor.rings() {
             for column in 0..sensor.columns {
@@ -454,11 +508,71 @@ mod tests {
                 }
             }
         }
-        let frame = Frame {
-            name: "crossing".into(),
+        Frame {
+            name: "pane".into(),
             points,
             ..Frame::default()
+        }
+    }
+
+    /// Where the sensor walked through the pane, its evidence is an
+    /// opening: below and beside the crossing, not above it or a metre
+    /// away; and a landmark walked through is passed through.
+    #[test]
+    fn where_the_sensor_crossed_the_plane_it_is_open() {
+        use crate::geometry::grid::Surface;
+        use crate::geometry::Plane;
+        use crate::sensor::SensorModel;
+        use nalgebra::Vector3;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let frame = pane_frame(&sensor);
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let mut pane = BoundedPlane::from_points(
+            plane,
+            [(-1.8, -1.2), (0.4, -1.2), (0.4, 1.2), (-1.8, 1.2)]
+                .iter()
+                .map(|&(y, z)| Point3::new(5.0, y, z)),
+        );
+        let f = EvidenceFrame {
+            frame: &frame,
+            scan: &scan,
+            pose: Isometry3::identity(),
         };
+        let params = EvidenceParams::default();
+        let evidence = gather_evidence(&pane, &[f], &params).unwrap();
+        pane.evidence = Some(std::sync::Arc::new(evidence));
+        let state = |pane: &BoundedPlane, y: f64, z: f64| {
+            let uv = pane.chart.to_2d(&Point3::new(5.0, y, z));
+            pane.evidence.as_ref().unwrap().state(&uv)
+        };
+        let (door, above, aside) = ((-0.8, -0.5), (-0.8, 0.9), (0.1, -0.5));
+        for (y, z) in [door, above, aside] {
+            assert_eq!(state(&pane, y, z), Surface::Transparent, "({y}, {z})");
+        }
+        let through = [Point3::new(4.0, -0.8, 0.0), Point3::new(6.0, -0.8, 0.0)];
+        let beside = [Point3::new(4.0, -0.8, 0.0), Point3::new(4.5, 3.0, 0.0)];
+        assert!(passed_through(&pane, &through));
+        assert!(!passed_through(&pane, &beside));
+        assert_eq!(open_where_crossed(&mut pane, &beside, 0.5), 0);
+        assert_eq!(open_where_crossed(&mut pane, &through, 0.5), 1);
+        assert_eq!(state(&pane, door.0, door.1), Surface::Open);
+        assert_eq!(state(&pane, above.0, above.1), Surface::Transparent);
+        assert_eq!(state(&pane, aside.0, aside.1), Surface::Transparent);
+    }
+
+    /// A pane at x = 5 seen head-on (glass echo, and a return from a wall
+    /// at x = 7 behind it) cuts a landmark at y ≈ -0.5 along a vertical
+    /// line: the pane's echoes on that line lie on the landmark's plane,
+    /// but their surface crosses it. They vote glass for the landmark
+    /// (a phantom pane) only with both the normal and the owner test off.
+    #[test]
+    fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
+        use crate::geometry::Plane;
+        use crate::sensor::SensorModel;
+        use nalgebra::Vector3;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let frame = pane_frame(&sensor);
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         // The landmark's plane holds one column's beams exactly.
         let column = sensor.column_of(1.0, -0.1);

@@ -12,7 +12,8 @@ pub mod merge;
 pub mod panes;
 
 pub use evidence::{
-    gather_evidence, EvidenceFrame, EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
+    gather_evidence, open_where_crossed, passed_through, path_crossings, EvidenceFrame,
+    EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
 };
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};

@@ -37,7 +37,8 @@ use crate::config::{BoundaryMode, Config};
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{
-    find_panes, EvidenceFrame, EvidenceGatherer, EvidenceTotal, PlaneMap, PlaneObservation,
+    find_panes, open_where_crossed, passed_through, EvidenceFrame, EvidenceGatherer, EvidenceTotal,
+    PlaneMap, PlaneObservation,
 };
 use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{planes_seen_from, BoundedPlane, Detection, EchoHistogram, EchoSplit};
@@ -186,6 +187,11 @@ pub fn run_plane_optimized_into(
     } else {
         None
     };
+    let path: Vec<Point3<f64>> = poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    let crossings_open = config.map.evidence.crossing_radius > 0.0;
     // The landmarks as classified: with their echo splits, when learned.
     let classified_planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
         (Some(space), true) => views
@@ -194,7 +200,8 @@ pub fn run_plane_optimized_into(
             .zip(&map_planes)
             .map(|((echo_split, mirror), bp)| BoundedPlane {
                 echo_split,
-                mirror,
+                // Nobody walks through a mirror.
+                mirror: mirror && !(crossings_open && passed_through(bp, &path)),
                 ..bp.clone()
             })
             .collect(),
@@ -307,8 +314,14 @@ fn gather_evidence(
         )?;
         timings.add_reading(reading);
     }
+    let path: Vec<Point3<f64>> = poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
     for (bp, total) in planes.iter_mut().zip(totals) {
         bp.evidence = total.map(|t| Arc::new(t.finish()));
+        // Where the sensor passed through the plane, it is open.
+        open_where_crossed(bp, &path, config.map.evidence.crossing_radius);
     }
     Ok(())
 }
