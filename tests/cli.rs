@@ -338,3 +338,47 @@ fn outputs_name_the_version_that_made_them() {
         "{report}"
     );
 }
+
+/// `--out` must be new or empty: an earlier run's directory is refused
+/// unless `--force`, which replaces that run's outputs (stale files
+/// included) and never anything a run does not write; a finished run
+/// leaves no `INCOMPLETE` marker.
+#[test]
+fn out_must_be_empty_unless_forced_and_force_removes_only_run_outputs() {
+    let out = tempfile::tempdir().unwrap();
+    let first = detect_sample(out.path(), &["--method", "single-scan", "--lean"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(!out.path().join("INCOMPLETE").exists());
+    let again = detect_sample(out.path(), &["--method", "single-scan", "--lean"]);
+    assert!(!again.status.success());
+    let err = stderr(&again);
+    assert!(
+        err.contains("not empty") && err.contains("--force"),
+        "{err}"
+    );
+    // A stale label of an earlier run goes with --force.
+    let stale = out.path().join("predictions/0000000000.000000.label");
+    std::fs::write(&stale, [0u8; 4]).unwrap();
+    let forced = detect_sample(
+        out.path(),
+        &["--method", "single-scan", "--lean", "--force"],
+    );
+    assert!(forced.status.success(), "{}", stderr(&forced));
+    assert!(!stale.exists(), "a stale prediction survived --force");
+    assert!(out.path().join("metrics.json").exists());
+    assert!(!out.path().join("INCOMPLETE").exists());
+    // Something no run writes is never removed.
+    let notes = out.path().join("notes.txt");
+    std::fs::write(&notes, "mine").unwrap();
+    let refused = detect_sample(
+        out.path(),
+        &["--method", "single-scan", "--lean", "--force"],
+    );
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("notes.txt"),
+        "{}",
+        stderr(&refused)
+    );
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+}

@@ -18,6 +18,7 @@ use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
 use super::detect::{detect_into, open_frames, Detected};
+use super::run_dir::RunDir;
 use super::visual::{write_index, VisualOptions};
 use super::{bundled_sample, load_config};
 
@@ -58,6 +59,9 @@ pub fn run(args: DemoArgs) -> Result<()> {
     config.sensor = scene.sensor.model.name.clone();
     let sim_out = args.out.join("sim");
     let sim_title = format!("specular demo: simulated scene '{}'", args.scene);
+    // The demo writes into its own directory: an earlier demo's outputs
+    // are replaced.
+    let sim_dir = RunDir::claim(&sim_out, true)?;
     let Detected { run, map } = detect_into(
         &sim_out,
         &sequence,
@@ -66,6 +70,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         false,
     )
     .context("plane-optimized on the simulated scene")?;
+    sim_dir.finish()?;
     let confusion = run.confusion;
     println!(
         "specular demo 1/2: simulated scene '{}' ({} frames, simulated in {:.1} s), plane-optimized with true poses",
@@ -92,6 +97,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         Some(&sample.join("poses.txt")),
         &config,
     )?;
+    let real_dir = RunDir::claim(&real_out, true)?;
     let Detected { run, .. } = detect_into(
         &real_out,
         &sequence,
@@ -100,6 +106,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         false,
     )
     .with_context(|| format!("running the demo on {}", sample.display()))?;
+    real_dir.finish()?;
     let confusion = run.confusion;
     println!(
         "\nspecular demo 2/2: {} real 3DRef frames ({}), plane-optimized",

@@ -11,6 +11,7 @@ use specular::pipeline::{
 };
 
 use super::output::{write_summaries, OutputOptions, RunWriter};
+use super::run_dir::RunDir;
 use super::visual::{write_visual, VisualOptions};
 use super::{load_config, MethodArg};
 
@@ -57,6 +58,10 @@ pub struct DetectArgs {
     /// same format as the labels), to see why a point got its class.
     #[arg(long)]
     pub rules: bool,
+    /// Replace the outputs of an earlier run in `--out` (a directory holding
+    /// anything else is still refused).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Run `detect`.
@@ -87,7 +92,9 @@ pub fn run(args: DetectArgs) -> Result<()> {
         mcap: !args.no_mcap,
         title: format!("specular detect: {}", input.display()),
     });
+    let dir = RunDir::claim(&args.out, args.force)?;
     let result = detect_into(&args.out, &sequence, &config, visual.as_ref(), args.rules)?;
+    dir.finish()?;
     let mut timings = result.run.timings.clone();
     timings.wall = wall.elapsed();
     println!(

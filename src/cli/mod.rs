@@ -8,6 +8,7 @@ mod eval;
 mod graph;
 mod output;
 mod reproduce;
+mod run_dir;
 mod simulate;
 mod slam;
 mod visual;

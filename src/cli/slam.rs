@@ -16,6 +16,7 @@ use specular::pipeline::{
 
 use super::load_config;
 use super::output::{OutputOptions, RunWriter};
+use super::run_dir::RunDir;
 
 /// Arguments of `slam`.
 #[derive(Args, Debug)]
@@ -43,6 +44,10 @@ pub struct SlamArgs {
     /// Print milliseconds per frame for every stage.
     #[arg(long)]
     pub timings: bool,
+    /// Replace the outputs of an earlier run in `--out` (a directory holding
+    /// anything else is still refused).
+    #[arg(long)]
+    pub force: bool,
     /// Back-end run after tracking: average (the paper), gn, lm, factrs
     /// (overrides `[backend] name`).
     #[arg(long)]
@@ -73,6 +78,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
     if sequence.is_empty() {
         anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
     }
+    let dir = RunDir::claim(&args.out, args.force)?;
     let truth = sequence.poses.clone();
     let origin = truth.as_ref().map(|t| t[0]);
     let wall = std::time::Instant::now();
@@ -250,5 +256,5 @@ pub fn run(args: SlamArgs) -> Result<()> {
         t.frames = slam.reports.len();
         print!("{}", t.table());
     }
-    Ok(())
+    dir.finish()
 }

@@ -1,0 +1,167 @@
+//! The `--out` directory of a run: new or empty, or (with `--force`) holding
+//! only an earlier run's outputs, which are replaced; marked incomplete
+//! until the run has written everything.
+//!
+//! Outputs that look finished but are not mislead: an earlier run's stale
+//! labels and plots beside fresh metrics, or a killed run's files with no
+//! sign that it stopped. So a run writes into a directory that holds
+//! nothing else, and an `INCOMPLETE` file says so until it succeeds; a run
+//! killed outright (no chance to clean up) leaves the marker behind.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+/// The marker left in an output directory while its run is unfinished.
+pub(crate) const INCOMPLETE: &str = "INCOMPLETE";
+
+/// What `detect`, `slam` and `demo` write into `--out` (names or
+/// extensions): `--force` removes these and nothing else.
+const RUN_OUTPUTS: [&str; 15] = [
+    "predictions",
+    "predictions.partial",
+    "metrics.json",
+    "config.toml",
+    "planes.json",
+    "around_corner.ply",
+    "map.ply",
+    "run.mcap",
+    "run.mcap.tmp",
+    "report.md",
+    "poses.txt",
+    "frames.csv",
+    INCOMPLETE,
+    ".png",
+    ".tmp",
+];
+
+/// Whether `name` is something a run writes (or its temporary file).
+fn is_run_output(name: &str) -> bool {
+    RUN_OUTPUTS
+        .iter()
+        .any(|k| name == *k || (k.starts_with('.') && name.ends_with(k)))
+        || (name.starts_with('.') && name.contains(".tmp"))
+}
+
+/// An output directory claimed by a run.
+#[derive(Debug)]
+pub(crate) struct RunDir {
+    path: PathBuf,
+    created: bool,
+    finished: bool,
+}
+
+impl RunDir {
+    /// Claim `path` for a run: create it when missing; refuse it when it
+    /// holds anything, unless `force`, which removes an earlier run's
+    /// outputs (and refuses a directory holding anything else). Marks the
+    /// directory incomplete.
+    pub(crate) fn claim(path: &Path, force: bool) -> Result<Self> {
+        let created = !path.exists();
+        if !created {
+            if !path.is_dir() {
+                bail!("--out {}: exists and is not a directory", path.display());
+            }
+            let entries: Vec<_> = std::fs::read_dir(path)
+                .with_context(|| format!("reading {}", path.display()))?
+                .collect::<std::io::Result<_>>()
+                .with_context(|| format!("reading {}", path.display()))?;
+            if !entries.is_empty() {
+                if !force {
+                    bail!(
+                        "--out {} is not empty (an earlier run?): give a new directory, or --force to replace that run's outputs",
+                        path.display()
+                    );
+                }
+                let mut names: Vec<String> = entries
+                    .iter()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .collect();
+                names.sort();
+                if let Some(other) = names.iter().find(|n| !is_run_output(n)) {
+                    bail!(
+                        "--out {} holds {other}, which no run writes: --force replaces only an earlier run's outputs; give a new directory",
+                        path.display()
+                    );
+                }
+                for e in entries {
+                    let p = e.path();
+                    let removed = if p.is_dir() {
+                        std::fs::remove_dir_all(&p)
+                    } else {
+                        std::fs::remove_file(&p)
+                    };
+                    removed.with_context(|| format!("removing the earlier {}", p.display()))?;
+                }
+            }
+        }
+        std::fs::create_dir_all(path).with_context(|| format!("creating {}", path.display()))?;
+        let marker = path.join(INCOMPLETE);
+        std::fs::write(
+            &marker,
+            format!(
+                "specular {} (commit {}): this run has not finished (it is running, failed or was killed); its outputs are incomplete.\n",
+                specular::VERSION,
+                specular::GIT_COMMIT
+            ),
+        )
+        .with_context(|| format!("writing {}", marker.display()))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            created,
+            finished: false,
+        })
+    }
+
+    /// The run succeeded: remove the marker.
+    pub(crate) fn finish(mut self) -> Result<()> {
+        let marker = self.path.join(INCOMPLETE);
+        std::fs::remove_file(&marker).with_context(|| format!("removing {}", marker.display()))?;
+        self.finished = true;
+        Ok(())
+    }
+}
+
+impl Drop for RunDir {
+    /// A failed run keeps its marker beside whatever it wrote; one that
+    /// left nothing else removes the marker too (and the directory, if it
+    /// created it).
+    fn drop(&mut self) {
+        if self.finished {
+            return;
+        }
+        let only_marker = std::fs::read_dir(&self.path).is_ok_and(|entries| {
+            entries
+                .filter_map(|e| e.ok())
+                .all(|e| e.file_name() == INCOMPLETE)
+        });
+        if only_marker {
+            let _ = std::fs::remove_file(self.path.join(INCOMPLETE));
+            if self.created {
+                let _ = std::fs::remove_dir(&self.path);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn run_outputs_are_recognised_and_nothing_else() {
+        for name in [
+            "predictions",
+            "metrics.json",
+            "topdown.png",
+            "run.mcap.tmp",
+            ".metrics.json.tmp123",
+            "INCOMPLETE",
+        ] {
+            assert!(is_run_output(name), "{name}");
+        }
+        for name in ["frames", "notes.txt", "data.ply", "poses.tum"] {
+            assert!(!is_run_output(name), "{name}");
+        }
+    }
+}
