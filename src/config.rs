@@ -54,6 +54,11 @@ pub struct InputParams {
     /// A frame is matched to the pose with the nearest timestamp, which must
     /// be within this many seconds.
     pub pose_tolerance: f64,
+    /// A frame with no pose within `pose_tolerance` gets one interpolated
+    /// between the poses before and after it (SLERP) when they are at most
+    /// this many seconds apart; beyond, the run stops naming the frame
+    /// (0: never interpolate).
+    pub pose_interpolation_gap: f64,
     /// Frames read from files are kept in memory after their first read,
     /// up to this many megabytes of points, so later passes over the
     /// sequence do not parse them again; beyond it frames are re-read at
@@ -61,10 +66,21 @@ pub struct InputParams {
     pub frame_cache_mb: f64,
 }
 
+impl InputParams {
+    /// How frames find their poses.
+    pub fn pose_matching(&self) -> crate::io::PoseMatching {
+        crate::io::PoseMatching {
+            tolerance: self.pose_tolerance,
+            max_gap: self.pose_interpolation_gap,
+        }
+    }
+}
+
 impl Default for InputParams {
     fn default() -> Self {
         Self {
             pose_tolerance: 0.01,
+            pose_interpolation_gap: 0.0,
             frame_cache_mb: crate::pipeline::sequence::DEFAULT_FRAME_CACHE_MB,
         }
     }
@@ -402,6 +418,12 @@ impl Config {
                 return Err(format!("{name} must be positive, got {v}"));
             }
         }
+        let gap = self.input.pose_interpolation_gap;
+        if !(gap >= 0.0 && gap.is_finite()) {
+            return Err(format!(
+                "input.pose_interpolation_gap must be >= 0 (0: never interpolate), got {gap}"
+            ));
+        }
         if !(d.ransac.probability > 0.0 && d.ransac.probability < 1.0) {
             return Err(format!(
                 "detector.ransac.probability must be in (0, 1), got {}",
@@ -735,7 +757,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("valid keys here: frame_cache_mb, pose_tolerance"),
+            e.contains("valid keys here: frame_cache_mb, pose_interpolation_gap, pose_tolerance"),
             "{e}"
         );
         let e = Config::from_toml("extend = \"paper\"", Path::new("my.toml"))

@@ -382,3 +382,147 @@ fn out_must_be_empty_unless_forced_and_force_removes_only_run_outputs() {
     );
     assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
 }
+
+/// The sample's poses as a KITTI file (one `[R | t]` a line, in frame
+/// order) give the same predictions as the TUM file; with the stamps moved
+/// 50 ms off every frame, poses are interpolated between neighbours up to
+/// `input.pose_interpolation_gap`, and `--pose-tolerance` widens the
+/// nearest-pose match.
+#[test]
+fn kitti_poses_interpolation_and_pose_tolerance() {
+    let sample = common::sample_dir();
+    let tum = specular::io::read_tum(&sample.join("poses.txt")).unwrap();
+    let frames = sample.join("frames");
+    let run = |poses: &Path, extra: &[&str]| {
+        let out = tempfile::tempdir().unwrap();
+        let mut args = vec![
+            "detect",
+            "--frames",
+            s(&frames),
+            "--poses",
+            s(poses),
+            "--out",
+            s(out.path()),
+            "--lean",
+        ];
+        args.extend_from_slice(extra);
+        let o = specular(&args);
+        let labels = o.status.success().then(|| {
+            let mut all = Vec::new();
+            for e in specular::io::list_frames(&frames).unwrap() {
+                all.extend(
+                    specular::io::read_labels(
+                        &out.path().join(format!("predictions/{}.label", e.name)),
+                    )
+                    .unwrap(),
+                );
+            }
+            all
+        });
+        (labels, stderr(&o))
+    };
+    let (reference, err) = run(&sample.join("poses.txt"), &[]);
+    let reference = reference.unwrap_or_else(|| panic!("{err}"));
+
+    let dir = tempfile::tempdir().unwrap();
+    let kitti = dir.path().join("poses.kitti");
+    let mut text = String::new();
+    for p in &tum {
+        let m = p.pose.to_homogeneous();
+        for r in 0..3 {
+            for c in 0..4 {
+                text.push_str(&format!("{:.12} ", m[(r, c)]));
+            }
+        }
+        text.push('\n');
+    }
+    std::fs::write(&kitti, &text).unwrap();
+    let (labels, err) = run(&kitti, &[]);
+    assert_eq!(labels.as_ref(), Some(&reference), "{err}");
+    // One pose short: the counts must agree.
+    let short: String = text.lines().skip(1).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&kitti, short).unwrap();
+    let (labels, err) = run(&kitti, &[]);
+    assert!(labels.is_none() && err.contains("one per frame"), "{err}");
+
+    // Each pose twice, 50 ms before and after its frame: interpolated
+    // halfway, the frame gets (nearly) its own pose back.
+    let shifted = dir.path().join("shifted.txt");
+    let mut lines = String::new();
+    for p in &tum {
+        for dt in [-0.05, 0.05] {
+            let (t, q) = (p.pose.translation.vector, p.pose.rotation.coords);
+            lines.push_str(&format!(
+                "{:.6} {} {} {} {} {} {} {}\n",
+                p.stamp + dt,
+                t.x,
+                t.y,
+                t.z,
+                q.x,
+                q.y,
+                q.z,
+                q.w
+            ));
+        }
+    }
+    std::fs::write(&shifted, lines).unwrap();
+    let (labels, err) = run(&shifted, &[]);
+    assert_eq!(labels.as_ref(), Some(&reference), "{err}");
+    let strict = dir.path().join("strict.toml");
+    std::fs::write(&strict, "[input]\npose_interpolation_gap = 0.0\n").unwrap();
+    let (labels, err) = run(&shifted, &["--config", s(&strict)]);
+    assert!(
+        labels.is_none() && err.contains("no pose within 0.01 s"),
+        "{err}"
+    );
+    let (labels, err) = run(
+        &shifted,
+        &["--config", s(&strict), "--pose-tolerance", "0.06"],
+    );
+    assert!(labels.is_some(), "{err}");
+}
+
+/// Unlabelled frames: `detect` prints how many points it predicted per
+/// class, and `metrics.json` holds those counts and the rule tally.
+#[test]
+fn an_unlabelled_run_reports_its_predicted_classes() {
+    let sample = common::sample_dir();
+    let frames = tempfile::tempdir().unwrap();
+    let mut total = 0u64;
+    for e in specular::io::list_frames(&sample.join("frames")).unwrap() {
+        let mut frame = specular::io::read_frame(&e.path).unwrap();
+        frame.has_labels = false;
+        total += frame.points.len() as u64;
+        specular::io::write_frame(
+            &frames.path().join(format!("{}.ply", e.name)),
+            &frame,
+            specular::io::PlyEncoding::BinaryLittleEndian,
+        )
+        .unwrap();
+    }
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(frames.path()),
+        "--out",
+        s(out.path()),
+        "--method",
+        "single-scan",
+        "--lean",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("points predicted (no labels to score): normal "),
+        "{stdout}"
+    );
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("metrics.json")).unwrap())
+            .unwrap();
+    assert_eq!(metrics["labelled"], false);
+    let predicted = metrics["predicted"].as_object().unwrap();
+    let sum: u64 = predicted.values().map(|v| v.as_u64().unwrap()).sum();
+    assert_eq!(sum, total);
+    assert!(predicted["normal"].as_u64().unwrap() > 0);
+}

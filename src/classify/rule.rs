@@ -139,6 +139,16 @@ impl RuleTally {
         }
     }
 
+    /// Points predicted as each class, whatever their rule and label
+    /// (unlabelled runs have only these counts).
+    pub fn predicted(&self, class: Class) -> u64 {
+        let c = (class.id() & 7) as usize;
+        self.counts
+            .iter()
+            .map(|by_class| by_class[c].iter().sum::<u64>())
+            .sum()
+    }
+
     /// Points decided by `rule` as `class` with truth `label`.
     pub fn count(&self, rule: Rule, class: Class, label: u8) -> u64 {
         self.counts[rule.id() as usize][(class.id() & 7) as usize][(label as usize).min(7)]

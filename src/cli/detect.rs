@@ -10,7 +10,7 @@ use specular::pipeline::{
     run_plane_optimized_into, run_single_scan_into, PlaneOptimizedOutput, RunOutput, Sequence,
 };
 
-use super::output::{write_summaries, OutputOptions, RunWriter};
+use super::output::{predicted_counts, write_summaries, OutputOptions, RunWriter};
 use super::run_dir::RunDir;
 use super::visual::{write_visual, VisualOptions};
 use super::{load_config, MethodArg};
@@ -30,9 +30,15 @@ pub struct DetectArgs {
     /// The bag's point-cloud topic.
     #[arg(long)]
     pub topic: Option<String>,
-    /// TUM pose file (`T_world_sensor`); frames are matched by timestamp.
+    /// Pose file (`T_world_sensor`): TUM, matched by timestamp (and
+    /// interpolated between neighbours within `input.pose_interpolation_gap`),
+    /// or KITTI (12 numbers a line), one per frame in order.
     #[arg(long)]
     pub poses: Option<PathBuf>,
+    /// Seconds between a frame and the nearest pose that still match
+    /// (overrides `input.pose_tolerance`).
+    #[arg(long)]
+    pub pose_tolerance: Option<f64>,
     /// Output directory (predictions/, metrics.json, config.toml).
     #[arg(long)]
     pub out: PathBuf,
@@ -69,6 +75,9 @@ pub fn run(args: DetectArgs) -> Result<()> {
     let mut config = load_config(&args.config)?;
     if let Some(m) = args.method {
         config.method = m.into();
+    }
+    if let Some(t) = args.pose_tolerance {
+        config.input.pose_tolerance = t;
     }
     let wall = std::time::Instant::now();
     let (input, sequence) = match (&args.frames, &args.bag) {
@@ -119,6 +128,15 @@ pub fn run(args: DetectArgs) -> Result<()> {
     }
     if let Some(conf) = &result.run.confusion {
         print!("{}", conf.metrics().table());
+    } else {
+        let counts: Vec<String> = predicted_counts(&result.run)
+            .into_iter()
+            .map(|(class, n)| format!("{class} {n}"))
+            .collect();
+        println!(
+            "points predicted (no labels to score): {}",
+            counts.join(", ")
+        );
     }
     if args.timings {
         print!("{}", timings.table());
@@ -139,7 +157,7 @@ pub(crate) fn open_frames(
     if config.method == Method::PlaneOptimized && poses.is_none() {
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
-    Ok(Sequence::open(frames, poses, config.input.pose_tolerance)?
+    Ok(Sequence::open(frames, poses, config.input.pose_matching())?
         .with_frame_cache(config.input.frame_cache_mb))
 }
 
@@ -157,12 +175,10 @@ pub(crate) fn open_bag(
     let frames = io::read_bag_frames(bag, topic)?;
     let mut sequence = Sequence::from_frames(frames, None, &bag.display().to_string())?;
     if let Some(path) = poses {
-        let stamped = io::read_tum(path)?;
-        sequence.poses = Some(io::match_poses(
+        sequence.poses = Some(io::read_poses_for(
             &sequence.entries,
-            &stamped,
-            config.input.pose_tolerance,
             path,
+            config.input.pose_matching(),
         )?);
     }
     Ok(sequence)

@@ -222,6 +222,37 @@ pub(crate) fn write_summaries(
         io::write_atomic(&out.join("metrics.json"), |w| {
             std::io::Write::write_all(w, json.as_bytes())
         })?;
+    } else {
+        // Without labels: what was predicted, and by which rule.
+        let value = serde_json::json!({
+            "specular": specular::provenance(),
+            "labelled": false,
+            "predicted": predicted_counts(run)
+                .into_iter()
+                .map(|(class, n)| (class.to_string(), serde_json::Value::from(n)))
+                .collect::<serde_json::Map<_, _>>(),
+            "rules": serde_json::to_value(run.rules).context("serialising rules")?,
+            "dropped_non_finite_points": run.dropped_non_finite,
+        });
+        let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;
+        io::write_atomic(&out.join("metrics.json"), |w| {
+            std::io::Write::write_all(w, json.as_bytes())
+        })?;
     }
     Ok(())
+}
+
+/// Points predicted per class (by class name), in the classes' id order.
+pub(crate) fn predicted_counts(run: &RunOutput) -> Vec<(&'static str, u64)> {
+    use specular::classify::Class;
+    [
+        Class::Normal,
+        Class::Glass,
+        Class::Reflection,
+        Class::Obstacle,
+        Class::Unclassified,
+    ]
+    .into_iter()
+    .map(|c| (c.name(), run.rules.predicted(c)))
+    .collect()
 }

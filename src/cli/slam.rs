@@ -48,6 +48,10 @@ pub struct SlamArgs {
     /// anything else is still refused).
     #[arg(long)]
     pub force: bool,
+    /// Seconds between a frame and the nearest true pose that still match
+    /// (overrides `input.pose_tolerance`).
+    #[arg(long)]
+    pub pose_tolerance: Option<f64>,
     /// Back-end run after tracking: average (the paper), gn, lm, factrs
     /// (overrides `[backend] name`).
     #[arg(long)]
@@ -69,10 +73,13 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .gt_poses
         .clone()
         .or_else(|| io::release_poses(&args.frames));
+    if let Some(t) = args.pose_tolerance {
+        config.input.pose_tolerance = t;
+    }
     let mut sequence = Sequence::open(
         &args.frames,
         gt_poses.as_deref(),
-        config.input.pose_tolerance,
+        config.input.pose_matching(),
     )?
     .with_frame_cache(config.input.frame_cache_mb);
     if sequence.is_empty() {

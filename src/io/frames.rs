@@ -93,21 +93,56 @@ fn secs(d: f64) -> String {
     }
 }
 
-/// The pose of each frame: the pose whose timestamp is nearest, which must lie
-/// within `tolerance` seconds. Never by position in a list. `poses_path` names
-/// the pose file in errors.
-///
-/// `poses` need not be sorted. On a tie the earlier pose wins.
+/// How frames find their poses by timestamp.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseMatching {
+    /// A pose within this many seconds of a frame is taken as it is.
+    pub tolerance: f64,
+    /// Otherwise the frame's pose is interpolated between the poses just
+    /// before and after it (linear in translation, SLERP in rotation) when
+    /// they are at most this many seconds apart (0: never).
+    pub max_gap: f64,
+}
+
+impl From<f64> for PoseMatching {
+    /// The nearest pose within `tolerance` seconds, no interpolation.
+    fn from(tolerance: f64) -> Self {
+        Self {
+            tolerance,
+            max_gap: 0.0,
+        }
+    }
+}
+
+/// Match every frame to the pose with the nearest timestamp in `poses`
+/// (any order), which must lie within `tolerance` seconds. Errors (naming
+/// `poses_path` and the frame) when a frame has no pose close enough.
 pub fn match_poses(
     frames: &[FrameEntry],
     poses: &[StampedPose],
     tolerance: f64,
     poses_path: &Path,
 ) -> Result<Vec<Isometry3<f64>>> {
-    if tolerance.is_nan() || tolerance < 0.0 {
-        return Err(Error::Config(format!(
-            "pose time tolerance must be a number >= 0, got {tolerance}"
-        )));
+    match_poses_with(frames, poses, tolerance.into(), poses_path)
+}
+
+/// [`match_poses`], and a frame with no pose within the tolerance gets one
+/// interpolated between its neighbours when they are close enough in time
+/// ([`PoseMatching::max_gap`]). Errors name the file, the frame and how far
+/// its poses are.
+pub fn match_poses_with(
+    frames: &[FrameEntry],
+    poses: &[StampedPose],
+    matching: PoseMatching,
+    poses_path: &Path,
+) -> Result<Vec<Isometry3<f64>>> {
+    let PoseMatching { tolerance, max_gap } = matching;
+    for (name, v) in [("tolerance", tolerance), ("interpolation gap", max_gap)] {
+        if v.is_nan() || v < 0.0 {
+            return Err(Error::Config(format!(
+                "pose time {name} must be a number >= 0, got {v}"
+            )));
+        }
     }
     if poses.is_empty() {
         return Err(Error::format(poses_path, "the pose file holds no poses"));
@@ -118,29 +153,84 @@ pub fn match_poses(
         .iter()
         .map(|f| {
             let i = sorted.partition_point(|p| p.stamp < f.stamp);
-            let mut best: Option<(f64, &StampedPose)> = None;
-            for j in [i.checked_sub(1), Some(i)].into_iter().flatten() {
-                if let Some(p) = sorted.get(j) {
-                    let d = (p.stamp - f.stamp).abs();
-                    if best.is_none_or(|(bd, _)| d < bd) {
-                        best = Some((d, p));
+            let (before, after) = (i.checked_sub(1).map(|j| sorted[j]), sorted.get(i).copied());
+            let nearest = [before, after]
+                .into_iter()
+                .flatten()
+                .min_by(|a, b| {
+                    (a.stamp - f.stamp)
+                        .abs()
+                        .total_cmp(&(b.stamp - f.stamp).abs())
+                })
+                .ok_or_else(|| Error::format(poses_path, "the pose file holds no poses"))?;
+            let d = (nearest.stamp - f.stamp).abs();
+            if d <= tolerance {
+                return Ok(nearest.pose);
+            }
+            let far = format!(
+                "no pose within {tolerance} s of frame {} (nearest is {} s away)",
+                f.name,
+                secs(d)
+            );
+            match (before, after) {
+                (Some(a), Some(b)) if max_gap > 0.0 => {
+                    let gap = b.stamp - a.stamp;
+                    if gap <= max_gap {
+                        let s = (f.stamp - a.stamp) / gap;
+                        Ok(interpolate(&a.pose, &b.pose, s))
+                    } else {
+                        Err(Error::format(
+                            poses_path,
+                            format!(
+                                "{far}, and its neighbours are {} s apart, more than the {max_gap} s a pose is interpolated across",
+                                secs(gap)
+                            ),
+                        ))
                     }
                 }
-            }
-            match best {
-                Some((d, p)) if d <= tolerance => Ok(p.pose),
-                Some((d, _)) => Err(Error::format(
+                (None, _) | (_, None) if max_gap > 0.0 => Err(Error::format(
                     poses_path,
-                    format!(
-                        "no pose within {tolerance} s of frame {} (nearest is {} s away)",
-                        f.name,
-                        secs(d)
-                    ),
+                    format!("{far}, and it lies outside the poses' time span: nothing to interpolate between"),
                 )),
-                None => Err(Error::format(poses_path, "the pose file holds no poses")),
+                _ => Err(Error::format(poses_path, far)),
             }
         })
         .collect()
+}
+
+/// The poses of `frames` from the pose file at `path`: TUM (timestamped,
+/// matched by [`match_poses_with`]) or KITTI (12 numbers a line, no
+/// timestamps: one pose per frame in time order, so the counts must agree).
+pub fn read_poses_for(
+    frames: &[FrameEntry],
+    path: &Path,
+    matching: PoseMatching,
+) -> Result<Vec<Isometry3<f64>>> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if super::kitti::is_kitti(&bytes) {
+        let poses = super::kitti::parse_kitti(&bytes, path)?;
+        if poses.len() != frames.len() {
+            return Err(Error::format(
+                path,
+                format!(
+                    "KITTI poses carry no timestamps, so there must be one per frame: {} poses for {} frames",
+                    poses.len(),
+                    frames.len()
+                ),
+            ));
+        }
+        return Ok(poses);
+    }
+    let stamped = super::tum::parse_tum(&bytes, path)?;
+    match_poses_with(frames, &stamped, matching, path)
+}
+
+/// The pose a share `s` (0..1) of the way from `a` to `b`: linear in
+/// translation, spherical-linear in rotation.
+pub fn interpolate(a: &Isometry3<f64>, b: &Isometry3<f64>, s: f64) -> Isometry3<f64> {
+    let t = a.translation.vector.lerp(&b.translation.vector, s);
+    let r = a.rotation.slerp(&b.rotation, s);
+    Isometry3::from_parts(t.into(), r)
 }
 
 #[cfg(test)]
@@ -182,6 +272,56 @@ mod tests {
             err.contains("no pose within 0.005 s of frame 1.731 (nearest is 0.731 s away)"),
             "{err}"
         );
+    }
+
+    /// Between two poses 0.1 s apart a frame gets the interpolated pose
+    /// (linear translation, SLERP rotation); across a wider gap, or
+    /// outside the poses' span, the error says why.
+    #[test]
+    fn poses_are_interpolated_within_the_gap() {
+        use nalgebra::{UnitQuaternion, Vector3};
+        let turn = |deg: f64| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), deg.to_radians());
+        let poses = [
+            StampedPose {
+                stamp: 1.0,
+                pose: Isometry3::from_parts(Vector3::new(0.0, 0.0, 0.0).into(), turn(0.0)),
+            },
+            StampedPose {
+                stamp: 1.1,
+                pose: Isometry3::from_parts(Vector3::new(1.0, 2.0, 0.0).into(), turn(40.0)),
+            },
+            StampedPose {
+                stamp: 3.0,
+                pose: Isometry3::translation(5.0, 0.0, 0.0),
+            },
+        ];
+        let matching = PoseMatching {
+            tolerance: 0.005,
+            max_gap: 0.2,
+        };
+        let path = Path::new("p.txt");
+        let m = match_poses_with(&[frame(1.025)], &poses, matching, path).unwrap();
+        assert!((m[0].translation.vector - Vector3::new(0.25, 0.5, 0.0)).norm() < 1e-9);
+        assert!((m[0].rotation.angle().to_degrees() - 10.0).abs() < 1e-9);
+        // Within the tolerance the nearest pose is taken as it is.
+        let m = match_poses_with(&[frame(1.099)], &poses, matching, path).unwrap();
+        assert_eq!(m[0], poses[1].pose);
+        let wide = match_poses_with(&[frame(2.0)], &poses, matching, path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            wide.contains("1.900 s apart") && wide.contains("0.2 s"),
+            "{wide}"
+        );
+        let outside = match_poses_with(&[frame(3.5)], &poses, matching, path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            outside.contains("outside the poses' time span"),
+            "{outside}"
+        );
+        // Without interpolation the frame between is an error.
+        assert!(match_poses(&[frame(1.025)], &poses, 0.005, path).is_err());
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Input and output at the edge of the library: 3DRef PLY frames, ROS 2
-//! bags, TUM pose files, prediction labels, and matching frames to poses by timestamp.
+//! bags, TUM and KITTI pose files, prediction labels, and matching frames
+//! to poses by timestamp.
 //!
 //! Every reader returns a [`crate::Error`] naming the file and what is wrong;
 //! every writer writes to a temporary file and renames it into place, so a
@@ -7,6 +8,7 @@
 
 pub mod atomic;
 pub mod frames;
+pub mod kitti;
 pub mod labels;
 pub mod map_ply;
 pub mod planes;
@@ -15,7 +17,11 @@ pub mod ros2_bag;
 pub mod tum;
 
 pub use atomic::write_atomic;
-pub use frames::{frame_dir, list_frames, match_poses, parse_stamp, release_poses, FrameEntry};
+pub use frames::{
+    frame_dir, interpolate, list_frames, match_poses, match_poses_with, parse_stamp,
+    read_poses_for, release_poses, FrameEntry, PoseMatching,
+};
+pub use kitti::{parse_kitti, read_kitti};
 pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};

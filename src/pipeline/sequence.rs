@@ -112,17 +112,19 @@ fn megabytes(mb: f64) -> usize {
 impl Sequence {
     /// The `*.ply` frames of `dir` (or of the 3DRef release layout
     /// `dir/raycast/hesai/`, see [`io::frame_dir`]) and, when `poses` is
-    /// given, each frame's pose matched by timestamp within `tolerance`
-    /// seconds. Nothing is parsed: every pass reads the frames it needs.
-    pub fn open(dir: &Path, poses: Option<&Path>, tolerance: f64) -> Result<Self> {
+    /// given, each frame's pose (TUM, matched by timestamp as `matching`
+    /// says, or KITTI, by order; [`io::read_poses_for`]). Nothing is
+    /// parsed: every pass reads the frames it needs.
+    pub fn open(
+        dir: &Path,
+        poses: Option<&Path>,
+        matching: impl Into<io::PoseMatching>,
+    ) -> Result<Self> {
         let dir = io::frame_dir(dir);
         let entries = io::list_frames(&dir)?;
         // Poses first: a missing pose is reported before any parsing work.
         let poses = match poses {
-            Some(path) => {
-                let stamped = io::read_tum(path)?;
-                Some(io::match_poses(&entries, &stamped, tolerance, path)?)
-            }
+            Some(path) => Some(io::read_poses_for(&entries, path, matching.into())?),
             None => None,
         };
         let cache = FrameCache::new(entries.len(), megabytes(DEFAULT_FRAME_CACHE_MB));
