@@ -18,6 +18,18 @@ fn pane() -> Vec<BoundedPlane> {
     )]
 }
 
+/// [`pane`] and a second pane like it 1 m behind (x = 6).
+fn two_panes() -> Vec<BoundedPlane> {
+    let mut planes = pane();
+    let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
+    let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
+    planes.push(BoundedPlane::from_points(
+        second,
+        corners.iter().map(|&(y, z)| Point3::new(6.0, y, z)),
+    ));
+    planes
+}
+
 /// One frame holding only `points` (sensor frame, single returns).
 fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
     Frame {
@@ -290,13 +302,7 @@ fn behind_a_mirror_nothing_is_real() {
 /// pane's mirror says nothing about it.
 #[test]
 fn beams_through_a_second_pane_skip_the_one_pane_tests() {
-    let mut planes = pane();
-    let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
-    let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
-    planes.push(BoundedPlane::from_points(
-        second,
-        corners.iter().map(|&(y, z)| Point3::new(6.0, y, z)),
-    ));
+    let planes = two_panes();
     let points = [[6.5f32, 0.2, 0.3]];
     assert_eq!(
         classify(&points, 50.0, &planes, &rule_only(true)),
@@ -326,13 +332,7 @@ fn split() -> crate::reflect::EchoSplit {
 /// Switched off, such beams are left undecided.
 #[test]
 fn past_a_second_pane_the_echo_strength_decides_pane_by_pane() {
-    let mut planes = pane();
-    let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
-    let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
-    planes.push(BoundedPlane::from_points(
-        second,
-        corners.iter().map(|&(y, z)| Point3::new(6.0, y, z)),
-    ));
+    let mut planes = two_panes();
     planes[0].echo_split = Some(split());
     planes[1].echo_split = Some(split());
     let points = [[8.0f32, 0.2, 0.3]];
