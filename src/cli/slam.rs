@@ -118,12 +118,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .collect();
     io::write_planes(&out.join("planes.json"), &records)?;
     let mut csv = String::from(
-        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,landmarks,time_ms\n",
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms\n",
     );
     for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
         writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.4},{},{},{:.3}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3}",
             names[r.index],
             r.planes,
             r.frame_matches,
@@ -139,6 +139,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
                 .as_ref()
                 .map_or(f64::NAN, |d| d.min_eigenvalue()),
             r.fallback,
+            r.fixed_by_points,
             r.landmarks,
             t.as_secs_f64() * 1e3
         )?;
