@@ -221,7 +221,7 @@ pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -
 
 /// Gather the messages of an MCAP file (one file of a bag, or a bag of
 /// its own).
-pub(crate) fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
+pub fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if !bytes.starts_with(MCAP_MAGIC) {
         return Err(Error::format(path, "not an MCAP file"));
