@@ -304,3 +304,24 @@ fn a_broken_bag_names_the_file_and_what_is_wrong() {
     let want = format!("{}: a directory without metadata.yaml", dir.display());
     assert!(err.contains(&want), "{err}");
 }
+
+/// `--topic` belongs to `--bag`: with `--frames` it is refused, not ignored.
+#[test]
+fn a_topic_without_a_bag_is_refused() {
+    let out = tempfile::tempdir().unwrap();
+    let frames = sample_dir().join("frames");
+    for command in ["detect", "slam"] {
+        let o = specular(&[
+            command,
+            "--frames",
+            s(&frames),
+            "--topic",
+            TOPIC,
+            "--out",
+            s(&out.path().join(command)),
+        ]);
+        assert!(!o.status.success(), "{command}");
+        let err = stderr(&o);
+        assert!(err.contains("'--topic <TOPIC>'"), "{command}: {err}");
+    }
+}

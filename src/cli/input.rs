@@ -25,7 +25,7 @@ pub struct InputArgs {
     #[arg(long, conflicts_with = "frames", requires = "topic")]
     pub bag: Option<PathBuf>,
     /// The bag's point-cloud topic.
-    #[arg(long, requires = "bag")]
+    #[arg(long, requires = "bag", conflicts_with = "frames")]
     pub topic: Option<String>,
 }
 
