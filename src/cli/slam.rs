@@ -1,4 +1,4 @@
-//! `specular slam`: Reflection SLAM on a frame directory.
+//! `specular slam`: Reflection SLAM on a frame directory or a ROS 2 bag.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -10,10 +10,9 @@ use specular::backend::FactorGraph;
 use specular::eval::trajectory_error;
 use specular::io::{self, StampedPose};
 use specular::pipeline::slam::classify_with_poses;
-use specular::pipeline::{
-    optimize_tracked, run_plane_optimized_into, track_sequence, Discard, Sequence,
-};
+use specular::pipeline::{optimize_tracked, run_plane_optimized_into, track_sequence, Discard};
 
+use super::input::InputArgs;
 use super::load_config;
 use super::output::{OutputOptions, RunWriter};
 use super::run_dir::RunDir;
@@ -21,11 +20,10 @@ use super::run_dir::RunDir;
 /// Arguments of `slam`.
 #[derive(Args, Debug)]
 pub struct SlamArgs {
-    /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
-    /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, true
-    /// poses from `hesai_pose.txt` unless `--gt-poses` is given).
-    #[arg(long)]
-    pub frames: PathBuf,
+    /// The frames: `--frames DIR` (a 3DRef release sequence directory
+    /// brings its true poses) or `--bag PATH --topic NAME`.
+    #[command(flatten)]
+    pub input: InputArgs,
     /// Output directory (poses.txt, planes.json, frames.csv, predictions/,
     /// metrics.json, config.toml).
     #[arg(long)]
@@ -68,23 +66,14 @@ pub fn run(args: SlamArgs) -> Result<()> {
     if let Some(name) = &args.backend {
         config.backend.name = name.parse()?;
     }
-    // The 3DRef release layout brings its pose file (the ground truth).
-    let gt_poses = args
-        .gt_poses
-        .clone()
-        .or_else(|| io::release_poses(&args.frames));
     if let Some(t) = args.pose_tolerance {
         config.input.pose_tolerance = t;
     }
-    let mut sequence = Sequence::open(
-        &args.frames,
-        gt_poses.as_deref(),
-        config.input.pose_matching(),
-    )?
-    .with_frame_cache(config.input.frame_cache_mb);
-    if sequence.is_empty() {
-        anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
-    }
+    // The 3DRef release layout brings its pose file (the ground truth).
+    let gt_poses = args.input.pose_file(args.gt_poses.as_deref());
+    let mut sequence = args
+        .input
+        .open(gt_poses.as_ref().map(|p| p.path.as_path()), &config)?;
     let dir = RunDir::claim(&args.out, args.force)?;
     let truth = sequence.poses.clone();
     let origin = truth.as_ref().map(|t| t[0]);
