@@ -45,6 +45,14 @@ pub fn point_jacobian(t: &Isometry3<f64>, sample: &SurfaceSample, m: &Point3<f64
     Vector6::new(n.x, n.y, n.z, dphi.x, dphi.y, dphi.z)
 }
 
+/// A sample takes part when its residual moves along some free direction
+/// at least this share of what a sample facing straight along it would.
+const MIN_ALIGNMENT: f64 = 0.3;
+
+/// The refinement stops when a step is shorter than this (tangent norm:
+/// metres and radians).
+const MIN_STEP: f64 = 1e-5;
+
 /// What the point refinement did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointRefinement {
@@ -93,6 +101,20 @@ pub fn refine_free_directions(
     if free.is_empty() {
         return out;
     }
+    // Only samples that face along some free direction can fix it (in a
+    // corridor: end walls and door frames, not the long walls); the others
+    // carry no information there, so they are not searched.
+    let facing: Vec<&SurfaceSample> = samples
+        .iter()
+        .filter(|s| {
+            let j = point_jacobian(&Isometry3::identity(), s, &s.point);
+            free.iter().any(|v| {
+                let lever = v.fixed_rows::<3>(0).norm()
+                    + s.point.coords.norm() * v.fixed_rows::<3>(3).norm();
+                j.dot(v).abs() >= MIN_ALIGNMENT * lever
+            })
+        })
+        .collect();
     let s2 = params.kernel_scale * params.kernel_scale;
     for _ in 0..params.max_iterations {
         // Unweighted information decides which free directions the samples
@@ -100,7 +122,7 @@ pub fn refine_free_directions(
         // system gives the step along those.
         let (mut info, mut h, mut g) = (Matrix6::zeros(), Matrix6::zeros(), Vector6::zeros());
         let mut pairs = 0;
-        for s in samples {
+        for s in facing.iter().copied() {
             let Some(m) = nearest(&(out.pose * s.point), params.max_correspondence) else {
                 continue;
             };
@@ -131,7 +153,7 @@ pub fn refine_free_directions(
         }
         out.pose = se3::retract(&out.pose, &step);
         out.iterations += 1;
-        if step.norm() < 1e-6 {
+        if step.norm() < MIN_STEP {
             break;
         }
     }

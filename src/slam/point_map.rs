@@ -19,6 +19,8 @@
 
 use std::collections::HashMap;
 
+use foldhash::fast::FixedState;
+
 use nalgebra::{Isometry3, Point3};
 use serde::{Deserialize, Serialize};
 
@@ -93,7 +95,7 @@ impl ScanSamples {
     /// Sample `frame` (organized as `scan`): the first point of every
     /// `voxel`-sized cell that has a surface normal, beyond `min_range`.
     pub fn sample(frame: &Frame, scan: &OrganizedScan, voxel: f64, min_range: f64) -> Self {
-        let mut taken: HashMap<[i32; 3], ()> = HashMap::new();
+        let mut taken: VoxelSet<()> = HashMap::with_hasher(FixedState::default());
         let mut samples = Vec::new();
         for (i, pt) in frame.points.iter().enumerate() {
             let p = pt.position();
@@ -137,6 +139,10 @@ impl ScanSamples {
     }
 }
 
+/// Voxels by integer key, hashed with a fixed seed (deterministic, and far
+/// faster than the default SipHash on three integers).
+type VoxelSet<T> = HashMap<[i32; 3], T, FixedState>;
+
 /// The voxel holding `p` for voxels of edge `voxel`.
 fn voxel_key(p: &Point3<f64>, voxel: f64) -> [i32; 3] {
     [
@@ -154,7 +160,7 @@ fn voxel_key(p: &Point3<f64>, voxel: f64) -> [i32; 3] {
 pub struct LocalPointMap {
     voxel: f64,
     max_per_voxel: usize,
-    voxels: HashMap<[i32; 3], Vec<Point3<f64>>>,
+    voxels: VoxelSet<Vec<Point3<f64>>>,
 }
 
 impl LocalPointMap {
@@ -164,7 +170,7 @@ impl LocalPointMap {
         Self {
             voxel,
             max_per_voxel: max_per_voxel.max(1),
-            voxels: HashMap::new(),
+            voxels: HashMap::with_hasher(FixedState::default()),
         }
     }
 
