@@ -1,13 +1,19 @@
 //! `specular graph`: export synthetic pose-plane graphs and solve graph
-//! files with a back-end (the side-by-side with `paper/gtsam_solve.py`).
+//! files with a back-end (the side-by-side with `paper/gtsam_solve.py`),
+//! writing the solution when asked.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use specular::backend::synthetic::{synthetic, SyntheticParams};
-use specular::backend::{backend, BackendName, BackendParams, FactorGraph, PlaneFactorKind};
+use specular::backend::{
+    backend, BackendName, BackendParams, FactorGraph, PlaneFactorKind, Values,
+};
+use specular::io::{self, StampedPose};
+
+use super::run_dir::RunDir;
 
 /// Arguments of `graph`.
 #[derive(Args, Debug)]
@@ -61,6 +67,22 @@ enum GraphCommand {
         /// observability) instead of the summary.
         #[arg(long)]
         report: bool,
+        /// Output directory for the solution, new or empty as for `detect`
+        /// and `slam`: `poses.txt` (the optimised poses as TUM, in id
+        /// order), `graph.json` (the same graph with the optimised poses and
+        /// planes as its values, in the graph format: solving it again
+        /// starts at the solution) and `solve.json` (the printed summary or
+        /// report).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// TUM file whose timestamps, in file order, stamp the poses in id
+        /// order (e.g. the `poses.txt` of the `slam` run that exported the
+        /// graph); without it a pose's timestamp in `poses.txt` is its id.
+        #[arg(long, requires = "out")]
+        stamps: Option<PathBuf>,
+        /// Replace the outputs of an earlier run in `--out`.
+        #[arg(long, requires = "out")]
+        force: bool,
     },
 }
 
@@ -124,8 +146,20 @@ pub fn run(args: GraphArgs) -> Result<()> {
             max_iterations,
             tolerance,
             report,
+            out,
+            stamps,
+            force,
         } => {
             let g = FactorGraph::read(&graph)?;
+            // Checked before solving, so a bad stamp file costs no solve.
+            let stamps = match &stamps {
+                Some(path) => Some(pose_stamps(path, g.values.poses.len())?),
+                None => None,
+            };
+            let dir = match &out {
+                Some(out) => Some(RunDir::claim(out, force)?),
+                None => None,
+            };
             let name = match which {
                 BackendArg::Average => BackendName::Average,
                 BackendArg::Gn => BackendName::Gn,
@@ -138,12 +172,12 @@ pub fn run(args: GraphArgs) -> Result<()> {
             params.solver.absolute_tolerance = tolerance;
             let b = backend(name, &params)?;
             let t0 = Instant::now();
-            let (_, r) = b
+            let (solved, r) = b
                 .optimize(&g, &g.values)
                 .with_context(|| format!("solving {}", graph.display()))?;
             let seconds = t0.elapsed().as_secs_f64();
-            if report {
-                println!("{}", serde_json::to_string_pretty(&r)?);
+            let printed = if report {
+                serde_json::to_string_pretty(&r)?
             } else {
                 let summary = serde_json::json!({
                     "backend": b.name(),
@@ -155,9 +189,60 @@ pub fn run(args: GraphArgs) -> Result<()> {
                     "termination": r.termination,
                     "weak_poses": r.observability.weak.len(),
                 });
-                println!("{summary}");
+                summary.to_string()
+            };
+            println!("{printed}");
+            if let (Some(out), Some(dir)) = (&out, dir) {
+                write_solution(out, &g, solved, stamps.as_deref(), &printed)?;
+                dir.finish()?;
+                eprintln!("poses.txt, graph.json, solve.json in {}", out.display());
             }
             Ok(())
         }
     }
+}
+
+/// The timestamps of a TUM file in file order, one per pose of a graph of
+/// `poses` poses.
+fn pose_stamps(path: &Path, poses: usize) -> Result<Vec<f64>> {
+    let stamps: Vec<f64> = io::read_tum(path)?.iter().map(|p| p.stamp).collect();
+    if stamps.len() != poses {
+        bail!(
+            "--stamps {}: {} timestamps for a graph of {poses} poses",
+            path.display(),
+            stamps.len()
+        );
+    }
+    Ok(stamps)
+}
+
+/// Write the solution into `out`, each file atomically: `poses.txt` (TUM,
+/// poses in id order, stamped by `stamps` or by their ids), `graph.json`
+/// (`graph` with `solved` as its values) and `solve.json` (`summary`).
+fn write_solution(
+    out: &Path,
+    graph: &FactorGraph,
+    solved: Values,
+    stamps: Option<&[f64]>,
+    summary: &str,
+) -> Result<()> {
+    let poses: Vec<StampedPose> = solved
+        .poses
+        .iter()
+        .enumerate()
+        .map(|(k, (&id, pose))| StampedPose {
+            stamp: stamps.map_or(f64::from(id), |s| s[k]),
+            pose: *pose,
+        })
+        .collect();
+    io::write_tum(&out.join("poses.txt"), &poses)?;
+    let solution = FactorGraph {
+        values: solved,
+        ..graph.clone()
+    };
+    solution.write(&out.join("graph.json"))?;
+    io::write_atomic(&out.join("solve.json"), |w| {
+        std::io::Write::write_all(w, format!("{summary}\n").as_bytes())
+    })?;
+    Ok(())
 }

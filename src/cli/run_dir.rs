@@ -15,9 +15,9 @@ use anyhow::{bail, Context, Result};
 /// The marker left in an output directory while its run is unfinished.
 pub(crate) const INCOMPLETE: &str = "INCOMPLETE";
 
-/// What `detect`, `slam` and `demo` write into `--out` (names or
-/// extensions): `--force` removes these and nothing else.
-const RUN_OUTPUTS: [&str; 15] = [
+/// What `detect`, `slam`, `demo` and `graph solve` write into `--out`
+/// (names or extensions): `--force` removes these and nothing else.
+const RUN_OUTPUTS: [&str; 17] = [
     "predictions",
     "predictions.partial",
     "metrics.json",
@@ -30,6 +30,8 @@ const RUN_OUTPUTS: [&str; 15] = [
     "report.md",
     "poses.txt",
     "frames.csv",
+    "graph.json",
+    "solve.json",
     INCOMPLETE,
     ".png",
     ".tmp",

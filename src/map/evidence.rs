@@ -22,6 +22,7 @@ use nalgebra::{Isometry3, Point2, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::direct::passed_another;
 use crate::cloud::Frame;
 use crate::geometry::grid::EvidenceGrid;
 use crate::reflect::BoundedPlane;
@@ -80,6 +81,11 @@ pub struct EvidenceParams {
     /// sensor passed through, not glass), m (0: off). Assumes the world's
     /// z axis points up.
     pub crossing_radius: f64,
+    /// Only beams that meet the plane before any other reflective landmark
+    /// vote: past a window or mirror a reflected echo with a transmitted
+    /// return behind it looks like glass on any plane (see
+    /// [`direct`](super::direct)).
+    pub direct_only: bool,
 }
 
 impl Default for EvidenceParams {
@@ -100,6 +106,7 @@ impl Default for EvidenceParams {
             echo_normal_max_deg: 0.0,
             echo_owner_test: false,
             crossing_radius: 0.0,
+            direct_only: false,
         }
     }
 }
@@ -196,9 +203,10 @@ impl EvidenceGatherer {
 
     /// The same gatherer aware of the other reflective landmarks (world
     /// frame) that an echo on this one's plane may belong to
-    /// ([`EvidenceParams::echo_owner_test`]).
+    /// ([`EvidenceParams::echo_owner_test`]) or a beam may pass before it
+    /// ([`EvidenceParams::direct_only`]).
     pub fn with_others(mut self, others: &[BoundedPlane]) -> Self {
-        if self.params.echo_owner_test {
+        if self.params.echo_owner_test || self.params.direct_only {
             self.others = others.to_vec();
         }
         self
@@ -405,11 +413,12 @@ fn vote_frame(
     // its beam meets nearer normal incidence.
     let owned_by_other = |x: &Point3<f64>, dir: &nalgebra::Vector3<f64>| {
         let here = plane.plane.normal.dot(dir).abs();
-        others.iter().any(|o| {
-            o.plane.signed_distance(x).abs() <= p.surface_band
-                && o.plane.normal.dot(dir).abs() > here
-                && o.bounds_2d(&o.chart.to_2d(x), 0.0)
-        })
+        p.echo_owner_test
+            && others.iter().any(|o| {
+                o.plane.signed_distance(x).abs() <= p.surface_band
+                    && o.plane.normal.dot(dir).abs() > here
+                    && o.bounds_2d(&o.chart.to_2d(x), 0.0)
+            })
     };
     // Whether the surface around point `i` crosses the plane rather than
     // lying on it (unknown surfaces do not).
@@ -442,7 +451,9 @@ fn vote_frame(
             continue;
         };
         let uv = plane.chart.to_2d(&(origin + dir * t));
-        if grid.index(&uv).is_none() {
+        if grid.index(&uv).is_none()
+            || (p.direct_only && passed_another(others, &dir, t, p.surface_band))
+        {
             continue;
         }
         let s = r - t;

@@ -6,6 +6,7 @@
 //! paper's weighted-average merger is [`WeightedAverageMerger`].
 
 pub mod boundary_fit;
+pub mod direct;
 pub mod evidence;
 pub mod landmark;
 pub mod merge;
