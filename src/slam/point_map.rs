@@ -17,7 +17,7 @@
 //! phantom. Samples behind a reflective plane of the frame or of the map
 //! (within its extent) are left out.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use foldhash::fast::FixedState;
 
@@ -95,7 +95,7 @@ impl ScanSamples {
     /// Sample `frame` (organized as `scan`): the first point of every
     /// `voxel`-sized cell that has a surface normal, beyond `min_range`.
     pub fn sample(frame: &Frame, scan: &OrganizedScan, voxel: f64, min_range: f64) -> Self {
-        let mut taken: VoxelSet<()> = HashMap::with_hasher(FixedState::default());
+        let mut taken: HashSet<[i32; 3], FixedState> = HashSet::with_hasher(FixedState::default());
         let mut samples = Vec::new();
         for (i, pt) in frame.points.iter().enumerate() {
             let p = pt.position();
@@ -103,11 +103,11 @@ impl ScanSamples {
                 continue;
             }
             let key = voxel_key(&p, voxel);
-            if taken.contains_key(&key) {
+            if taken.contains(&key) {
                 continue;
             }
             if let Some(normal) = scan.local_normal(frame, i) {
-                taken.insert(key, ());
+                taken.insert(key);
                 samples.push(SurfaceSample { point: p, normal });
             }
         }
@@ -141,7 +141,7 @@ impl ScanSamples {
 
 /// Voxels by integer key, hashed with a fixed seed (deterministic, and far
 /// faster than the default SipHash on three integers).
-type VoxelSet<T> = HashMap<[i32; 3], T, FixedState>;
+type VoxelMap<T> = HashMap<[i32; 3], T, FixedState>;
 
 /// The voxel holding `p` for voxels of edge `voxel`.
 fn voxel_key(p: &Point3<f64>, voxel: f64) -> [i32; 3] {
@@ -160,7 +160,7 @@ fn voxel_key(p: &Point3<f64>, voxel: f64) -> [i32; 3] {
 pub struct LocalPointMap {
     voxel: f64,
     max_per_voxel: usize,
-    voxels: VoxelSet<Vec<Point3<f64>>>,
+    voxels: VoxelMap<Vec<Point3<f64>>>,
 }
 
 impl LocalPointMap {
