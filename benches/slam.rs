@@ -7,10 +7,12 @@
 //! and the median time per frame is reported:
 //!
 //! - detection: organize the scan and detect reflective planes;
-//! - extraction: filter, normals, ground, region growing, RANSAC, hulls;
+//! - extraction: filter, normals, ground, region growing, RANSAC, hulls,
+//!   and the surface samples of the point term (`[slam.points]`);
 //! - registration: frame-to-frame matching, RANSAC and Gauss–Newton;
-//! - tracking: the whole `Tracker::track` step (frame-to-frame and
-//!   scan-to-map registration, map update);
+//! - tracking: the whole `Tracker::track_with_samples` step (frame-to-frame
+//!   and scan-to-map registration, the point refinement of free
+//!   directions, map update);
 //! - whole step: detection + extraction + tracking.
 
 use std::path::PathBuf;
@@ -23,7 +25,7 @@ use specular::io;
 use specular::pipeline::registry::{detector, extractor, frame_seed, merger, rejector};
 use specular::registration::{match_planes, register};
 use specular::sensor::{OrganizedScan, SensorModel};
-use specular::slam::Tracker;
+use specular::slam::{ScanSamples, Tracker};
 
 fn frames_dir() -> PathBuf {
     if let Some(arg) = std::env::args().skip(1).find(|a| !a.starts_with('-')) {
@@ -77,6 +79,10 @@ fn main() {
             let start = Instant::now();
             let mut planes = ex.extract(f, &scan, &detection, frame_seed(1, &f.name));
             planes.extend(reflective_planes(f, &detection, &config.extractor));
+            let samples = p
+                .points
+                .enabled
+                .then(|| ScanSamples::sample(f, &scan, p.points.sample_voxel, p.points.min_range));
             e += start.elapsed().as_secs_f64();
             count += planes.len();
             if let Some(prev) = &previous {
@@ -96,7 +102,7 @@ fn main() {
             }
             previous = Some(planes.clone());
             let start = Instant::now();
-            std::hint::black_box(tracker.track(planes, 5));
+            std::hint::black_box(tracker.track_with_samples(planes, samples.as_ref(), 5));
             t += start.elapsed().as_secs_f64();
         }
         let n = frames.len() as f64;

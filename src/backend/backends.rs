@@ -92,6 +92,12 @@ pub struct BackendParams {
     pub odometry_translation_sigma: f64,
     /// Relative-pose rotation noise (radians).
     pub odometry_rotation_sigma: f64,
+    /// An observation whose points lie farther than this (rms) from its
+    /// landmark's plane at the tracked pose is a wrong association and is
+    /// left out of the graph, m (0: every observation is kept). One such
+    /// observation of a large plane outweighs hundreds of frames of
+    /// odometry.
+    pub max_observation_rms: f64,
     /// `average`: weight of a landmark after its first observation (paper 3).
     pub average_second_weight: f64,
     /// `average`: cap on a landmark's weight (paper 10).
@@ -110,6 +116,7 @@ impl Default for BackendParams {
             point_sigma: 0.1,
             odometry_translation_sigma: 0.05,
             odometry_rotation_sigma: 0.01,
+            max_observation_rms: 0.0,
             average_second_weight: 3.0,
             average_max_weight: 10.0,
         }
@@ -140,6 +147,12 @@ impl BackendParams {
                     "backend.{name} must be finite and positive, got {v}"
                 )));
             }
+        }
+        if !(self.max_observation_rms >= 0.0) || !self.max_observation_rms.is_finite() {
+            return Err(Error::Config(format!(
+                "backend.max_observation_rms must be finite and ≥ 0, got {}",
+                self.max_observation_rms
+            )));
         }
         let s = &self.solver;
         if s.max_iterations == 0 {

@@ -17,7 +17,8 @@ use specular::config::Method;
 use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
-use super::detect::{detect_into, open_frames, Detected};
+use super::detect::{detect_into, Detected};
+use super::input::InputArgs;
 use super::run_dir::RunDir;
 use super::visual::{write_index, VisualOptions};
 use super::{bundled_sample, load_config};
@@ -92,11 +93,12 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let sample = bundled_sample();
     let real_out = args.out.join("real");
     let real_title = "specular demo: bundled 3DRef sample".to_string();
-    let sequence = open_frames(
-        &sample.join("frames"),
-        Some(&sample.join("poses.txt")),
-        &config,
-    )?;
+    let frames = InputArgs {
+        frames: Some(sample.join("frames")),
+        bag: None,
+        topic: None,
+    };
+    let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;
     let Detected { run, .. } = detect_into(
         &real_out,

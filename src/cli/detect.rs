@@ -5,11 +5,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Result};
 use clap::Args;
 use specular::config::{Config, Method};
-use specular::io;
 use specular::pipeline::{
     run_plane_optimized_into, run_single_scan_into, PlaneOptimizedOutput, RunOutput, Sequence,
 };
 
+use super::input::InputArgs;
 use super::output::{predicted_counts, write_summaries, OutputOptions, RunWriter};
 use super::run_dir::RunDir;
 use super::visual::{write_visual, VisualOptions};
@@ -18,18 +18,9 @@ use super::{load_config, MethodArg};
 /// Arguments of `detect`.
 #[derive(Args, Debug)]
 pub struct DetectArgs {
-    /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
-    /// sequence directory (`raw/seqN`, frames in `raycast/hesai/`, poses
-    /// from `hesai_pose.txt` unless `--poses` is given).
-    #[arg(long, required_unless_present = "bag")]
-    pub frames: Option<PathBuf>,
-    /// ROS 2 bag (`.mcap`) of `sensor_msgs/msg/PointCloud2` frames, instead
-    /// of `--frames`.
-    #[arg(long, conflicts_with = "frames", requires = "topic")]
-    pub bag: Option<PathBuf>,
-    /// The bag's point-cloud topic.
-    #[arg(long)]
-    pub topic: Option<String>,
+    /// The frames: `--frames DIR` or `--bag PATH --topic NAME`.
+    #[command(flatten)]
+    pub input: InputArgs,
     /// Pose file (`T_world_sensor`): TUM, matched by timestamp (and
     /// interpolated between neighbours within `input.pose_interpolation_gap`),
     /// or KITTI (12 numbers a line), one per frame in order.
@@ -80,23 +71,17 @@ pub fn run(args: DetectArgs) -> Result<()> {
         config.input.pose_tolerance = t;
     }
     let wall = std::time::Instant::now();
-    let (input, sequence) = match (&args.frames, &args.bag) {
-        (Some(frames), _) => {
-            // The 3DRef release layout brings its pose file.
-            let poses = args.poses.clone().or_else(|| io::release_poses(frames));
-            if args.poses.is_none() {
-                if let Some(p) = &poses {
-                    println!("poses: {} (3DRef release layout)", p.display());
-                }
-            }
-            (frames, open_frames(frames, poses.as_deref(), &config)?)
-        }
-        (None, Some(bag)) => {
-            let topic = args.topic.as_deref().unwrap_or_default();
-            (bag, open_bag(bag, topic, args.poses.as_deref(), &config)?)
-        }
-        (None, None) => bail!("give --frames DIR or --bag FILE --topic NAME"),
-    };
+    let poses = args.input.pose_file(args.poses.as_deref());
+    if config.method == Method::PlaneOptimized && poses.is_none() {
+        bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
+    }
+    if let Some(p) = poses.as_ref().filter(|p| p.from_release) {
+        println!("poses: {} (3DRef release layout)", p.path.display());
+    }
+    let input = args.input.path();
+    let sequence = args
+        .input
+        .open(poses.as_ref().map(|p| p.path.as_path()), &config)?;
     let visual = (!args.lean).then(|| VisualOptions {
         mcap: !args.no_mcap,
         title: format!("specular detect: {}", input.display()),
@@ -145,43 +130,6 @@ pub fn run(args: DetectArgs) -> Result<()> {
         println!("report: {}", args.out.join("report.md").display());
     }
     Ok(())
-}
-
-/// The frames of a directory (read pass by pass, never all at once) with
-/// their poses when given; the plane-optimized method needs poses.
-pub(crate) fn open_frames(
-    frames: &Path,
-    poses: Option<&Path>,
-    config: &Config,
-) -> Result<Sequence> {
-    if config.method == Method::PlaneOptimized && poses.is_none() {
-        bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
-    }
-    Ok(Sequence::open(frames, poses, config.input.pose_matching())?
-        .with_frame_cache(config.input.frame_cache_mb))
-}
-
-/// The point clouds on `topic` of a ROS 2 bag as a sequence, with their
-/// poses when given.
-pub(crate) fn open_bag(
-    bag: &Path,
-    topic: &str,
-    poses: Option<&Path>,
-    config: &Config,
-) -> Result<Sequence> {
-    if config.method == Method::PlaneOptimized && poses.is_none() {
-        bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
-    }
-    let frames = io::read_bag_frames(bag, topic)?;
-    let mut sequence = Sequence::from_frames(frames, None, &bag.display().to_string())?;
-    if let Some(path) = poses {
-        sequence.poses = Some(io::read_poses_for(
-            &sequence.entries,
-            path,
-            config.input.pose_matching(),
-        )?);
-    }
-    Ok(sequence)
 }
 
 /// A finished `detect` run.

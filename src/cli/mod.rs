@@ -6,6 +6,7 @@ mod demo;
 mod detect;
 mod eval;
 mod graph;
+mod input;
 mod output;
 mod reproduce;
 mod run_dir;

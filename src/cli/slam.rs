@@ -1,4 +1,4 @@
-//! `specular slam`: Reflection SLAM on a frame directory.
+//! `specular slam`: Reflection SLAM on a frame directory or a ROS 2 bag.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -11,11 +11,10 @@ use specular::backend::FactorGraph;
 use specular::eval::trajectory_error;
 use specular::io::{self, StampedPose};
 use specular::pipeline::slam::classify_with_poses;
-use specular::pipeline::{
-    optimize_tracked, run_plane_optimized_into, track_sequence, Discard, Sequence,
-};
+use specular::pipeline::{optimize_tracked, run_plane_optimized_into, track_sequence, Discard};
 use specular::viz::plots::{self, TrajectorySeries};
 
+use super::input::InputArgs;
 use super::load_config;
 use super::output::{OutputOptions, RunWriter};
 use super::run_dir::RunDir;
@@ -23,11 +22,10 @@ use super::run_dir::RunDir;
 /// Arguments of `slam`.
 #[derive(Args, Debug)]
 pub struct SlamArgs {
-    /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
-    /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, true
-    /// poses from `hesai_pose.txt` unless `--gt-poses` is given).
-    #[arg(long)]
-    pub frames: PathBuf,
+    /// The frames: `--frames DIR` (a 3DRef release sequence directory
+    /// brings its true poses) or `--bag PATH --topic NAME`.
+    #[command(flatten)]
+    pub input: InputArgs,
     /// Output directory (poses.txt, planes.json, frames.csv, predictions/,
     /// metrics.json, config.toml, trajectory.png).
     #[arg(long)]
@@ -70,23 +68,14 @@ pub fn run(args: SlamArgs) -> Result<()> {
     if let Some(name) = &args.backend {
         config.backend.name = name.parse()?;
     }
-    // The 3DRef release layout brings its pose file (the ground truth).
-    let gt_poses = args
-        .gt_poses
-        .clone()
-        .or_else(|| io::release_poses(&args.frames));
     if let Some(t) = args.pose_tolerance {
         config.input.pose_tolerance = t;
     }
-    let mut sequence = Sequence::open(
-        &args.frames,
-        gt_poses.as_deref(),
-        config.input.pose_matching(),
-    )?
-    .with_frame_cache(config.input.frame_cache_mb);
-    if sequence.is_empty() {
-        anyhow::bail!("{}: no frames (*.ply) found", args.frames.display());
-    }
+    // The 3DRef release layout brings its pose file (the ground truth).
+    let gt_poses = args.input.pose_file(args.gt_poses.as_deref());
+    let mut sequence = args
+        .input
+        .open(gt_poses.as_ref().map(|p| p.path.as_path()), &config)?;
     let dir = RunDir::claim(&args.out, args.force)?;
     let truth = sequence.poses.clone();
     let origin = truth.as_ref().map(|t| t[0]);
@@ -127,12 +116,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .collect();
     io::write_planes(&out.join("planes.json"), &records)?;
     let mut csv = String::from(
-        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,landmarks,time_ms\n",
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms\n",
     );
     for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
         writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.4},{},{},{:.3}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3}",
             names[r.index],
             r.planes,
             r.frame_matches,
@@ -148,6 +137,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
                 .as_ref()
                 .map_or(f64::NAN, |d| d.min_eigenvalue()),
             r.fallback,
+            r.fixed_by_points,
             r.landmarks,
             t.as_secs_f64() * 1e3
         )?;

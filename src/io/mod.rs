@@ -1,5 +1,5 @@
 //! Input and output at the edge of the library: 3DRef PLY frames, ROS 2
-//! bags, TUM and KITTI pose files, prediction labels, and matching frames
+//! bags (rosbag2 directories, MCAP and sqlite3 `.db3` files), TUM and KITTI pose files, prediction labels, and matching frames
 //! to poses by timestamp.
 //!
 //! Every reader returns a [`crate::Error`] naming the file and what is wrong;
@@ -7,6 +7,7 @@
 //! failed run never leaves a half-written output.
 
 pub mod atomic;
+pub mod db3;
 pub mod frames;
 pub mod kitti;
 pub mod labels;
@@ -14,6 +15,7 @@ pub mod map_ply;
 pub mod planes;
 pub mod ply;
 pub mod ros2_bag;
+pub mod rosbag2;
 pub mod tum;
 
 pub use atomic::write_atomic;
@@ -26,5 +28,5 @@ pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
-pub use ros2_bag::read_bag_frames;
+pub use ros2_bag::{read_bag_frames, BagKind};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

@@ -1,5 +1,11 @@
-//! ROS 2 bags (`.mcap` from `ros2 bag record -s mcap`): dual-return frames
-//! as `sensor_msgs/msg/PointCloud2` messages in CDR.
+//! ROS 2 bags: dual-return frames as `sensor_msgs/msg/PointCloud2`
+//! messages in CDR, in every form `ros2 bag record` leaves them.
+//!
+//! [`read_bag_frames`] takes a rosbag2 directory (its `metadata.yaml` names
+//! the storage, `mcap` or `sqlite3`, and the storage files in order, several
+//! when the recording was split; see [`super::rosbag2`]), a bare `.mcap`
+//! file or a bare `.db3` file (see [`super::db3`]). What a path is comes from
+//! its content (magic bytes, `metadata.yaml`), not its name.
 //!
 //! Fields read: `x y z` (float32/float64), `intensity`, `ring`, `return`
 //! (or `ret`, 1 first / 2 last) and `label` when present (any numeric type).
@@ -13,7 +19,8 @@
 //! keep their order and labels.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::io::Read;
+use std::path::{Path, PathBuf};
 
 use crate::cloud::{drop_non_finite, Frame, Point};
 use crate::{Error, Result};
@@ -25,45 +32,213 @@ pub const POINTCLOUD2: &str = "sensor_msgs/msg/PointCloud2";
 /// dependencies, in the concatenated form rosbag2 writes).
 pub const POINTCLOUD2_SCHEMA: &str = "std_msgs/Header header\nuint32 height\nuint32 width\nsensor_msgs/PointField[] fields\nbool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n================================================================================\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n================================================================================\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n================================================================================\nMSG: sensor_msgs/PointField\nuint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n";
 
+/// The first bytes of an MCAP file.
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+/// The first bytes of an SQLite 3 database (rosbag2's `.db3` storage).
+pub(crate) const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
+/// The first bytes of a zstd frame (rosbag2's `--compression-mode file`).
+const ZSTD_MAGIC: &[u8] = &[0x28, 0xb5, 0x2f, 0xfd];
+
 /// Every `PointCloud2` message on `topic` of the bag at `path`, as frames in
-/// timestamp order.
+/// timestamp order. `path` is a rosbag2 directory (or its `metadata.yaml`),
+/// an MCAP file or an SQLite (`.db3`) file; see [`BagKind::of`].
 pub fn read_bag_frames(path: &Path, topic: &str) -> Result<Vec<Frame>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let stream = mcap::MessageStream::new(&bytes)
-        .map_err(|e| Error::format(path, format!("not an MCAP file: {e}")))?;
-    let mut frames = Vec::new();
-    let mut topics = BTreeMap::new();
-    for msg in stream {
-        let msg = msg.map_err(|e| Error::format(path, format!("MCAP: {e}")))?;
-        let schema = msg.channel.schema.as_ref().map(|s| s.name.as_str());
-        *topics.entry(msg.channel.topic.clone()).or_insert(0usize) += 1;
-        if msg.channel.topic != topic {
-            continue;
+    let mut frames = TopicFrames::new(topic);
+    match BagKind::of(path)? {
+        BagKind::Mcap => read_mcap(path, &mut frames)?,
+        BagKind::Sqlite3 => super::db3::read_db3(path, &mut frames)?,
+        BagKind::Directory(dir) => return super::rosbag2::read_directory(&dir, frames),
+    }
+    frames.finish(path)
+}
+
+/// The forms of ROS 2 bag that [`read_bag_frames`] reads.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BagKind {
+    /// One MCAP file (`ros2 bag record -s mcap`, or any MCAP with CDR
+    /// `PointCloud2` messages).
+    Mcap,
+    /// One SQLite file of rosbag2's `sqlite3` storage (`.db3`).
+    Sqlite3,
+    /// A rosbag2 directory: its `metadata.yaml` names the storage and files.
+    Directory(PathBuf),
+}
+
+impl BagKind {
+    /// What `path` is, from its content: a directory holding
+    /// `metadata.yaml` (or that file itself), or a file starting with the
+    /// MCAP or SQLite magic bytes. Anything else is an error naming `path`
+    /// and what it is not.
+    pub fn of(path: &Path) -> Result<BagKind> {
+        if path.is_dir() {
+            if path.join("metadata.yaml").is_file() {
+                return Ok(BagKind::Directory(path.to_path_buf()));
+            }
+            return Err(Error::format(
+                path,
+                "a directory without metadata.yaml: not a rosbag2 bag (give the bag directory, an .mcap or a .db3 file)",
+            ));
         }
-        if schema != Some(POINTCLOUD2) || msg.channel.message_encoding != "cdr" {
+        let mut head = Vec::with_capacity(16);
+        std::fs::File::open(path)
+            .and_then(|f| f.take(16).read_to_end(&mut head))
+            .map_err(|e| Error::io(path, e))?;
+        if head.starts_with(MCAP_MAGIC) {
+            return Ok(BagKind::Mcap);
+        }
+        if head.starts_with(SQLITE_MAGIC) {
+            return Ok(BagKind::Sqlite3);
+        }
+        if path.file_name().is_some_and(|n| n == "metadata.yaml") {
+            let dir = path.parent().filter(|p| !p.as_os_str().is_empty());
+            return Ok(BagKind::Directory(
+                dir.unwrap_or(Path::new(".")).to_path_buf(),
+            ));
+        }
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let message = if head.starts_with(ZSTD_MAGIC) {
+            "compressed with zstd as a whole (rosbag2 --compression-mode file): decompress it first (zstd -d)".to_string()
+        } else if ext.eq_ignore_ascii_case("db3") {
+            "not an SQLite database".to_string()
+        } else if ext.eq_ignore_ascii_case("mcap") {
+            "not an MCAP file".to_string()
+        } else {
+            "not a ROS 2 bag: neither an MCAP file, an SQLite database (.db3) nor a rosbag2 directory".to_string()
+        };
+        Err(Error::format(path, message))
+    }
+}
+
+/// The frames of one topic gathered over a bag's storage files, with every
+/// topic seen on the way (for the error that lists them).
+pub struct TopicFrames {
+    topic: String,
+    frames: Vec<Frame>,
+    /// Topic name -> (type, messages).
+    seen: BTreeMap<String, (String, usize)>,
+}
+
+impl TopicFrames {
+    /// Gather the point clouds of `topic`.
+    pub fn new(topic: &str) -> Self {
+        Self {
+            topic: topic.to_string(),
+            frames: Vec::new(),
+            seen: BTreeMap::new(),
+        }
+    }
+
+    /// The topic gathered.
+    pub fn topic(&self) -> &str {
+        &self.topic
+    }
+
+    /// Whether `name` is the topic gathered.
+    pub fn wants(&self, name: &str) -> bool {
+        name == self.topic
+    }
+
+    /// Note `messages` messages of topic `name` of type `kind` serialized
+    /// as `encoding` in the storage file `path`; the topic gathered must be
+    /// a CDR `PointCloud2`, else the error names `path` and what it is.
+    pub fn note(
+        &mut self,
+        path: &Path,
+        name: &str,
+        kind: &str,
+        encoding: &str,
+        messages: usize,
+    ) -> Result<()> {
+        if self.wants(name) {
+            check_type(path, name, kind, encoding)?;
+        }
+        let entry = self.seen.entry(name.to_string());
+        entry.or_insert_with(|| (kind.to_string(), 0)).1 += messages;
+        Ok(())
+    }
+
+    /// Decode one message of the topic gathered, found in `path` at
+    /// `time_ns` (the bag's receive time, for the error message).
+    pub fn push(&mut self, path: &Path, time_ns: i64, data: &[u8]) -> Result<()> {
+        let frame = decode_pointcloud2(data).map_err(|m| {
+            Error::format(path, format!("{} message at {time_ns} ns: {m}", self.topic))
+        })?;
+        self.frames.push(frame);
+        Ok(())
+    }
+
+    /// The topics seen, as `name (type, N messages)`, comma-separated.
+    pub fn topic_list(&self) -> String {
+        if self.seen.is_empty() {
+            return "the bag has none".into();
+        }
+        let list: Vec<String> = self
+            .seen
+            .iter()
+            .map(|(name, (kind, n))| format!("{name} ({kind}, {n} messages)"))
+            .collect();
+        list.join(", ")
+    }
+
+    /// The frames in timestamp order; an error naming `path` when the topic
+    /// had no message (listing the topics present) or two messages share a
+    /// header stamp (their frames would have the same name).
+    pub fn finish(mut self, path: &Path) -> Result<Vec<Frame>> {
+        if self.frames.is_empty() {
             return Err(Error::format(
                 path,
                 format!(
-                    "topic {topic} is {} in {}, not {POINTCLOUD2} in cdr",
-                    schema.unwrap_or("schemaless"),
-                    msg.channel.message_encoding
+                    "no messages on {}; topics: {}",
+                    self.topic,
+                    self.topic_list()
                 ),
             ));
         }
-        let frame = decode_pointcloud2(&msg.data).map_err(|m| {
-            Error::format(path, format!("{topic} message at {} ns: {m}", msg.log_time))
-        })?;
-        frames.push(frame);
+        self.frames.sort_by(|a, b| a.stamp.total_cmp(&b.stamp));
+        if let Some(w) = self.frames.windows(2).find(|w| w[0].name == w[1].name) {
+            return Err(Error::format(
+                path,
+                format!(
+                    "two messages on {} have the same header stamp {}",
+                    self.topic, w[0].name
+                ),
+            ));
+        }
+        Ok(self.frames)
     }
-    if frames.is_empty() {
-        let list: Vec<String> = topics.keys().cloned().collect();
-        return Err(Error::format(
-            path,
-            format!("no messages on {topic}; topics: {}", list.join(", ")),
-        ));
+}
+
+/// The topic read must be a CDR `PointCloud2`.
+pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -> Result<()> {
+    if kind == POINTCLOUD2 && encoding == "cdr" {
+        return Ok(());
     }
-    frames.sort_by(|a, b| a.stamp.total_cmp(&b.stamp));
-    Ok(frames)
+    Err(Error::format(
+        path,
+        format!("topic {topic} is {kind} in {encoding}, not {POINTCLOUD2} in cdr"),
+    ))
+}
+
+/// Gather the messages of an MCAP file (one file of a bag, or a bag of
+/// its own).
+pub fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    if !bytes.starts_with(MCAP_MAGIC) {
+        return Err(Error::format(path, "not an MCAP file"));
+    }
+    let stream = mcap::MessageStream::new(&bytes)
+        .map_err(|e| Error::format(path, format!("not an MCAP file: {e}")))?;
+    for msg in stream {
+        let msg = msg.map_err(|e| Error::format(path, format!("MCAP: {e}")))?;
+        let schema = msg.channel.schema.as_ref().map(|s| s.name.as_str());
+        let topic = &msg.channel.topic;
+        let encoding = &msg.channel.message_encoding;
+        frames.note(path, topic, schema.unwrap_or("schemaless"), encoding, 1)?;
+        if frames.wants(topic) {
+            frames.push(path, msg.log_time as i64, &msg.data)?;
+        }
+    }
+    Ok(())
 }
 
 /// A little-endian CDR reader (alignment relative to the payload start).

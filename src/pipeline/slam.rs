@@ -26,7 +26,7 @@ use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
-use crate::slam::{FrameReport, Tracker, TrackingLog};
+use crate::slam::{FrameReport, PointParams, ScanSamples, Tracker, TrackingLog};
 use crate::Result;
 use rayon::prelude::*;
 
@@ -58,26 +58,42 @@ fn extractor_seed(seed: u64, name: &str) -> u64 {
     frame_seed(seed ^ 0x9e37_79b9_7f4a_7c15, name)
 }
 
-/// The planes of one frame (sensor frame): ground and ordinary planes from
-/// `extractor`, then the reflective planes of `detector` (their largest
-/// patches, see [`reflective_planes`]; `extractor_params` gives the gap and
-/// acceptance rule). Also returns the
-/// time spent per stage.
-pub fn frame_planes(
+/// What tracking needs of one frame (sensor frame).
+#[derive(Debug, Clone, Default)]
+pub struct FrameFeatures {
+    /// Ground, ordinary and reflective planes.
+    pub planes: Vec<FramePlane>,
+    /// Surface samples for the directions the planes leave free (`None`
+    /// when the point term is off).
+    pub samples: Option<ScanSamples>,
+}
+
+/// The features of one frame (sensor frame): ground and ordinary planes
+/// from `extractor`, then the reflective planes of `detector` (their
+/// largest patches, see [`reflective_planes`]; `extractor_params` gives the
+/// gap and acceptance rule), and the surface samples of `points` when it is
+/// on. Also returns the time spent per stage.
+pub fn frame_features(
     frame: &Frame,
     sensor: &SensorModel,
     detector: &dyn ReflectiveDetector,
     extractor: &dyn PlaneExtractor,
     extractor_params: &ExtractorParams,
+    points: &PointParams,
     seed: u64,
-) -> Result<(Vec<FramePlane>, StageTimings)> {
+) -> Result<(FrameFeatures, StageTimings)> {
     let (scan, detection, mut t) = organize_and_detect(frame, sensor, detector, seed)?;
     let start = Instant::now();
     let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
     planes.extend(reflective_planes(frame, &detection, extractor_params));
     t.add("extract", start.elapsed());
+    let start = Instant::now();
+    let samples = points
+        .enabled
+        .then(|| ScanSamples::sample(frame, &scan, points.sample_voxel, points.min_range));
+    t.add("sample points", start.elapsed());
     t.frames = 1;
-    Ok((planes, t))
+    Ok((FrameFeatures { planes, samples }, t))
 }
 
 /// Run Reflection SLAM over `sequence` (its poses, if any, are not used):
@@ -128,21 +144,23 @@ pub fn track_sequence(
         "track",
         |k, frame| {
             check_points(sequence, k, frame)?;
-            frame_planes(
+            frame_features(
                 frame,
                 &sensor,
                 detector.as_ref(),
                 extractor.as_ref(),
                 &config.extractor,
+                &config.slam.points,
                 config.seed,
             )
         },
-        |_, frame, (planes, t)| {
+        |_, frame, (features, t)| {
             timings.merge(&t);
             second_returns += frame.second_returns();
             let start = Instant::now();
             let seed = frame_seed(config.seed ^ 0x51a4, &frame.name);
-            let report = tracker.track(planes, seed);
+            let report =
+                tracker.track_with_samples(features.planes, features.samples.as_ref(), seed);
             let track = start.elapsed();
             timings.add("track", track);
             frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);

@@ -27,12 +27,16 @@ pub mod closed_form;
 pub mod degeneracy;
 pub mod gauss_newton;
 pub mod matching;
+pub mod point_to_plane;
 pub mod rejector;
 
 pub use closed_form::closed_form;
 pub use degeneracy::Degeneracy;
 pub use gauss_newton::{refine, GaussNewtonParams, Refinement};
 pub use matching::{match_planes, MatchCriteria};
+pub use point_to_plane::{
+    refine_free_directions, PointRefineParams, PointRefinement, SurfaceSample,
+};
 pub use rejector::{
     AcceptAll, Consensus, GroundTripleRansac, MismatchRejector, RejectorName, RejectorParams,
 };

@@ -12,7 +12,10 @@
 //!   gauge stays the first pose's;
 //! - one plane factor per logged observation (plane-to-plane or the
 //!   point-to-plane scatter factor, per [`BackendParams::plane_factor`]),
-//!   with the configured robust kernel.
+//!   with the configured robust kernel; an observation whose points lie
+//!   far from its landmark at the tracked pose
+//!   ([`BackendParams::max_observation_rms`]) is a wrong association and
+//!   is left out.
 //!
 //! The first pose is fixed (the graph's automatic gauge): it defines the
 //! world frame exactly as tracking did.
@@ -32,6 +35,15 @@ use crate::Result;
 
 /// Looser noise of a relative-pose factor taken from tracking itself.
 const FALLBACK_ODOMETRY_SCALE: f64 = 10.0;
+
+/// The rms distance of `obs`'s points from the plane `landmark` (world
+/// frame) with the observing frame at `pose`.
+fn observation_rms(obs: &LandmarkObservation, pose: &Isometry3<f64>, landmark: &PlaneVar) -> f64 {
+    let plane = landmark.plane().transformed(&pose.inverse());
+    let n = plane.normal;
+    let spread = n.dot(&(obs.scatter * n)) / (obs.count.max(1) as f64);
+    (spread.max(0.0) + plane.signed_distance(&obs.centroid).powi(2)).sqrt()
+}
 
 /// The graph of a tracking run: one pose per keyframe (every frame when
 /// every frame is a keyframe), planes by landmark id. Landmarks pruned from
@@ -170,7 +182,13 @@ fn graph_of(
         1.0 / params.plane_offset_sigma,
     ));
     for obs in observations {
-        if !planes.contains_key(&obs.landmark) {
+        let Some(landmark) = planes.get(&obs.landmark) else {
+            continue;
+        };
+        if params.max_observation_rms > 0.0
+            && observation_rms(obs, &log.frames[obs.frame].pose, landmark)
+                > params.max_observation_rms
+        {
             continue;
         }
         let (x, l) = (obs.frame as u32, obs.landmark as u32);

@@ -26,9 +26,11 @@ pub mod association;
 pub mod graph;
 pub mod log;
 pub mod motion;
+pub mod point_map;
 pub mod tracker;
 
 pub use association::{associate, MapMatchParams};
 pub use log::{LandmarkObservation, TrackedFrame, TrackingLog};
 pub use motion::{MotionModel, MotionModelName, MotionParams};
+pub use point_map::{LocalPointMap, PointParams, ScanSamples};
 pub use tracker::{FrameReport, SlamParams, Tracker};

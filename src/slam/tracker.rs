@@ -1,20 +1,22 @@
 //! The tracking step: one frame's planes in, its pose and the updated map
 //! out.
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
 use super::graph::{update_map, window_graph};
 use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
 use super::motion::{MotionModel, MotionParams};
+use super::point_map::{LocalPointMap, PointParams, ScanSamples};
 use crate::backend::{Backend, BackendParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
 use crate::map::{MapMerger, PlaneMap};
+use crate::reflect::BoundedPlane;
 use crate::registration::{
-    match_planes, register, Degeneracy, GaussNewtonParams, MatchCriteria, MismatchRejector,
-    RejectorParams,
+    match_planes, refine_free_directions, register, Degeneracy, GaussNewtonParams, MatchCriteria,
+    MismatchRejector, PointRefineParams, RejectorParams,
 };
 
 /// Reflection SLAM settings (`[slam]`).
@@ -36,6 +38,9 @@ pub struct SlamParams {
     pub rejector: RejectorParams,
     /// Gauss–Newton refinement and the degeneracy threshold.
     pub gauss_newton: GaussNewtonParams,
+    /// Points where planes are not enough: the directions the planes leave
+    /// free are refined against a local map of points.
+    pub points: PointParams,
     /// Landmarks are pruned once this many frames old ...
     pub prune_after: usize,
     /// ... when they have fewer observations than this.
@@ -80,6 +85,7 @@ impl Default for SlamParams {
             map_matching: MapMatchParams::default(),
             rejector: RejectorParams::default(),
             gauss_newton: GaussNewtonParams::default(),
+            points: PointParams::default(),
             prune_after: 30,
             prune_min_observations: 3,
             rpe_segment: 1.0,
@@ -112,6 +118,9 @@ pub struct FrameReport {
     pub degeneracy: Option<Degeneracy>,
     /// The pose came from the motion model alone (no registration).
     pub fallback: bool,
+    /// Of the directions the planes left free, how many the points fixed
+    /// (the others kept the motion model's prediction).
+    pub fixed_by_points: usize,
     /// Landmarks in the map after the update.
     pub landmarks: usize,
     /// Landmarks pruned in this step.
@@ -141,6 +150,8 @@ pub struct Tracker {
     window: Option<(Box<dyn Backend>, BackendParams)>,
     /// Pose of the last keyframe.
     last_keyframe: Option<Isometry3<f64>>,
+    /// Earlier frames' surface samples around the sensor.
+    points: LocalPointMap,
 }
 
 impl Tracker {
@@ -164,6 +175,7 @@ impl Tracker {
             log: TrackingLog::default(),
             window: None,
             last_keyframe: None,
+            points: LocalPointMap::new(params.points.map_voxel, params.points.max_points_per_voxel),
         }
     }
 
@@ -195,8 +207,21 @@ impl Tracker {
     }
 
     /// Track one frame given its planes (sensor frame); `seed` makes the
-    /// randomised parts deterministic.
+    /// randomised parts deterministic. Without surface samples the
+    /// directions the planes leave free keep the motion model's prediction.
     pub fn track(&mut self, planes: Vec<FramePlane>, seed: u64) -> FrameReport {
+        self.track_with_samples(planes, None, seed)
+    }
+
+    /// Track one frame given its planes and its surface samples (sensor
+    /// frame, [`ScanSamples`]): the directions the planes leave free are
+    /// refined against the local point map ([`PointParams`]).
+    pub fn track_with_samples(
+        &mut self,
+        planes: Vec<FramePlane>,
+        samples: Option<&ScanSamples>,
+        seed: u64,
+    ) -> FrameReport {
         let p = self.params;
         let index = self.frames;
         self.frames += 1;
@@ -216,6 +241,7 @@ impl Tracker {
             inliers: 0,
             degeneracy: None,
             fallback: false,
+            fixed_by_points: 0,
             landmarks: 0,
             pruned: 0,
             pose: self.origin,
@@ -278,7 +304,24 @@ impl Tracker {
             _ => self.origin,
         };
 
-        // 4. Map update: matched planes fuse into their landmark, the others
+        // 4. Points where planes are not enough.
+        let pose = match samples.filter(|_| p.points.enabled) {
+            Some(samples) => {
+                let refined = self.refine_with_points(&planes, samples, pose, &mut report);
+                if refined != pose {
+                    // The frame-to-frame registration left the same
+                    // directions free: the back-end's odometry is the
+                    // refined motion.
+                    if let Some((_, prev_pose)) = &self.previous {
+                        odometry = Some(prev_pose.inverse() * refined);
+                    }
+                }
+                refined
+            }
+            None => pose,
+        };
+
+        // 5. Map update: matched planes fuse into their landmark, the others
         //    go through the merger's own matching (or become landmarks).
         let keyframe = self.is_keyframe(&pose);
         for (fp, m) in usable.iter().zip(&matched) {
@@ -360,8 +403,54 @@ impl Tracker {
         Some(pose)
     }
 
-    /// Log that `plane` of frame `frame` was fused into the landmark at
-    /// index `k` of the map.
+    /// Refine the directions of `pose` that the planes left free (per
+    /// `report`'s degeneracy) against the local point map, then add the
+    /// frame's samples to the map; samples behind a reflective plane of the
+    /// frame or of the map are left out of both. Returns the refined pose
+    /// and counts the fixed directions in `report`.
+    fn refine_with_points(
+        &mut self,
+        planes: &[FramePlane],
+        samples: &ScanSamples,
+        pose: Isometry3<f64>,
+        report: &mut FrameReport,
+    ) -> Isometry3<f64> {
+        let pp = self.params.points;
+        let to_sensor = pose.inverse();
+        let reflective: Vec<BoundedPlane> = planes
+            .iter()
+            .filter(|fp| fp.kind == PlaneKind::Reflective)
+            .map(|fp| BoundedPlane::from_points(fp.plane, fp.hull_3d()))
+            .chain(
+                self.map
+                    .landmarks
+                    .iter()
+                    .filter(|l| l.kind == PlaneKind::Reflective)
+                    .map(|l| l.bounded().transformed(&to_sensor)),
+            )
+            .collect();
+        let clean = samples.without_reflections(&reflective, pp.reflective_margin);
+        let mut pose = pose;
+        if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
+            let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
+            let params = PointRefineParams {
+                max_correspondence: pp.max_correspondence,
+                kernel_scale: pp.kernel_scale,
+                max_iterations: pp.max_iterations,
+                min_information: pp.min_information,
+            };
+            let points = &self.points;
+            let refined =
+                refine_free_directions(&clean, |q, d| points.nearest(q, d), &pose, &free, &params);
+            report.fixed_by_points = refined.fixed;
+            pose = refined.pose;
+        }
+        self.points.insert(&clean, &pose);
+        self.points
+            .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
+        pose
+    }
+
     /// Whether a frame tracked at `pose` is a keyframe: the first, every
     /// frame when both keyframe thresholds are 0, else one that moved or
     /// turned past them from the last keyframe.
@@ -378,6 +467,8 @@ impl Tracker {
             || rel.rotation.angle().to_degrees() > p.keyframe_turn_deg
     }
 
+    /// Log that `plane` of frame `frame` was fused into the landmark at
+    /// index `k` of the map.
     fn log_observation(&mut self, frame: usize, k: usize, plane: &FramePlane) {
         if let Some(l) = self.map.landmarks.get(k) {
             self.log

@@ -45,3 +45,26 @@ pub fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         })
         .collect()
 }
+
+/// The rosbag2 bags of the bundled sample written by the `rosbags` Python
+/// library (`tests/fixtures/`, see its README).
+pub fn fixtures_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures")
+}
+
+/// Run the `specular` binary with `args`.
+pub fn specular(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_specular"))
+        .args(args)
+        .output()
+        .expect("run specular")
+}
+
+/// Copy the files of directory `from` into a new directory `to`.
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+}
