@@ -168,11 +168,31 @@ pub struct OutputParams {
     /// Voxel size used to thin the accumulated PLY maps, m (0 keeps every
     /// point).
     pub map_voxel: f64,
+    /// The top-down map (`topdown.png`) draws the points from this height
+    /// above the floor, m (`-inf`: no lower bound): the floor left out.
+    pub topdown_min_height: f64,
+    /// ... up to this height above the floor, m (`inf`: no upper bound):
+    /// the ceiling left out.
+    pub topdown_max_height: f64,
+}
+
+impl OutputParams {
+    /// The heights drawn in the top-down map.
+    pub fn topdown_slice(&self) -> crate::viz::topdown::HeightSlice {
+        crate::viz::topdown::HeightSlice {
+            min: self.topdown_min_height,
+            max: self.topdown_max_height,
+        }
+    }
 }
 
 impl Default for OutputParams {
     fn default() -> Self {
-        Self { map_voxel: 0.03 }
+        Self {
+            map_voxel: 0.03,
+            topdown_min_height: 0.3,
+            topdown_max_height: 2.0,
+        }
     }
 }
 
@@ -489,6 +509,12 @@ impl Config {
         }
         if !(self.output.map_voxel >= 0.0) {
             return Err("output.map_voxel must be >= 0".into());
+        }
+        if !(self.output.topdown_min_height < self.output.topdown_max_height) {
+            return Err(
+                "output.topdown_min_height must be below output.topdown_max_height (-inf and inf: no bound)"
+                    .into(),
+            );
         }
         self.backend.validate().map_err(|e| e.to_string())?;
         Ok(())

@@ -93,3 +93,28 @@ fn a_one_key_file_scores_as_the_default_on_the_ten_shared_frames() {
     assert!(a.is_some());
     assert_eq!(a, b);
 }
+
+/// The top view's height slice (issue 18, finding 6): 0.3-2.0 m above the
+/// floor in both built-ins; `-inf`/`inf` lift a bound (and survive the
+/// round trip through `config.toml`); an empty slice is refused.
+#[test]
+fn the_topdown_slice_is_configured_and_checked() {
+    for name in ["default", "paper"] {
+        let c = Config::resolve(name).unwrap();
+        assert_eq!(
+            (c.output.topdown_min_height, c.output.topdown_max_height),
+            (0.3, 2.0),
+            "{name}"
+        );
+    }
+    let (_dir, path) = file("all.toml", "[output]\ntopdown_min_height = -inf\n");
+    let c = resolve(&path);
+    assert_eq!(c.output.topdown_min_height, f64::NEG_INFINITY);
+    let (_dir2, again) = file("again.toml", &c.to_toml());
+    assert_eq!(resolve(&again), c);
+    let (_dir3, bad) = file("bad.toml", "[output]\ntopdown_min_height = 2.5\n");
+    let err = Config::resolve(bad.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("topdown_min_height"), "{err}");
+}

@@ -206,4 +206,7 @@ fn cli_writes_poses_map_frames_and_metrics() {
     assert!(metrics["classification"]["miou"].as_f64().is_some());
     assert!(Path::new(&p.join("predictions")).is_dir());
     assert!(p.join("config.toml").exists());
+    // The trajectory plot (issue 18, finding 6).
+    let png = std::fs::read(p.join("trajectory.png")).unwrap();
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 5_000);
 }

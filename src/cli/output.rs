@@ -46,7 +46,7 @@ pub(crate) struct RunWriter {
     around: Option<AroundCornerMap>,
     measured: Option<MeasuredMap>,
     recorder: Option<McapRecorder>,
-    trajectory: Vec<[f64; 2]>,
+    trajectory: Vec<[f64; 3]>,
     finished: bool,
 }
 
@@ -58,8 +58,8 @@ pub(crate) struct WrittenFrames {
     pub measured: Option<Vec<MapPoint>>,
     /// The recording, when written.
     pub mcap: Option<McapSummary>,
-    /// The sensor path (x, y), when the frames had poses.
-    pub trajectory: Vec<[f64; 2]>,
+    /// The sensor path (x, y, z), when the frames had poses.
+    pub trajectory: Vec<[f64; 3]>,
 }
 
 impl RunWriter {
@@ -146,8 +146,7 @@ impl FrameSink for RunWriter {
             io::write_labels(&self.partial.join(format!("{}.rule", output.name)), &rules)?;
         }
         if let Some(pose) = pose {
-            self.trajectory
-                .push([pose.translation.vector.x, pose.translation.vector.y]);
+            self.trajectory.push(pose.translation.vector.into());
             if let Some(map) = &mut self.around {
                 map.add(frame, pose, &output.classes);
             }

@@ -5,12 +5,14 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use nalgebra::Isometry3;
 use serde_json::json;
 use specular::backend::FactorGraph;
 use specular::eval::trajectory_error;
 use specular::io::{self, StampedPose};
 use specular::pipeline::slam::classify_with_poses;
 use specular::pipeline::{optimize_tracked, run_plane_optimized_into, track_sequence, Discard};
+use specular::viz::plots::{self, TrajectorySeries};
 
 use super::input::InputArgs;
 use super::load_config;
@@ -25,7 +27,7 @@ pub struct SlamArgs {
     #[command(flatten)]
     pub input: InputArgs,
     /// Output directory (poses.txt, planes.json, frames.csv, predictions/,
-    /// metrics.json, config.toml).
+    /// metrics.json, config.toml, trajectory.png).
     #[arg(long)]
     pub out: PathBuf,
     /// True poses (TUM, `T_world_sensor`): the first aligns the estimate's
@@ -98,6 +100,13 @@ pub fn run(args: SlamArgs) -> Result<()> {
         })
         .collect();
     io::write_tum(&out.join("poses.txt"), &stamped)?;
+    write_trajectory_plot(
+        out,
+        &slam.poses,
+        &slam.tracked_poses,
+        truth.as_deref(),
+        config.backend.name.as_str(),
+    )?;
     let names = sequence.names();
     let records: Vec<_> = slam
         .map
@@ -219,7 +228,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         fps
     );
     println!(
-        "poses.txt, planes.json, frames.csv, metrics.json in {}",
+        "poses.txt, planes.json, frames.csv, metrics.json, trajectory.png in {}",
         out.display()
     );
     if let Some(r) = &slam.backend {
@@ -254,4 +263,50 @@ pub fn run(args: SlamArgs) -> Result<()> {
         print!("{}", t.table());
     }
     dir.finish()
+}
+
+/// `OUT/trajectory.png`: the back-end's poses and tracking's alone, over the
+/// ground truth when given (drawn as they are, without the SE(3) alignment
+/// of the ATE: the estimate starts at the true first pose).
+fn write_trajectory_plot(
+    out: &std::path::Path,
+    estimated: &[Isometry3<f64>],
+    tracked: &[Isometry3<f64>],
+    truth: Option<&[Isometry3<f64>]>,
+    backend: &str,
+) -> Result<()> {
+    let xy = |poses: &[Isometry3<f64>]| -> Vec<[f64; 2]> {
+        poses
+            .iter()
+            .map(|p| [p.translation.vector.x, p.translation.vector.y])
+            .collect()
+    };
+    let mut series = Vec::new();
+    if let Some(t) = truth {
+        series.push(TrajectorySeries {
+            name: "ground truth".into(),
+            colour: [170, 170, 170],
+            width: 7,
+            points: xy(t),
+        });
+    }
+    series.push(TrajectorySeries {
+        name: "tracking alone".into(),
+        colour: [30, 90, 255],
+        width: 2,
+        points: xy(tracked),
+    });
+    series.push(TrajectorySeries {
+        name: format!("estimated (back-end {backend})"),
+        colour: [220, 30, 30],
+        width: 2,
+        points: xy(estimated),
+    });
+    let caption = if truth.is_some() {
+        "SLAM trajectory over the ground truth (top-down, not aligned)"
+    } else {
+        "SLAM trajectory (top-down, first pose at the origin)"
+    };
+    plots::trajectory_png(&out.join("trajectory.png"), caption, &series)?;
+    Ok(())
 }

@@ -8,7 +8,7 @@ use specular::config::Config;
 use specular::io;
 use specular::pipeline::{PlaneOptimizedOutput, RunOutput};
 use specular::reflect::BoundedPlane;
-use specular::viz::{plots, report::Report};
+use specular::viz::{plots, report::Report, topdown};
 
 use super::output::WrittenFrames;
 
@@ -78,11 +78,28 @@ pub(crate) fn write_visual(
         }
 
         let trajectory = &written.trajectory;
-        plots::topdown_png(&out.join("topdown.png"), points, planes, trajectory)?;
+        let top = topdown::topdown_png(
+            &out.join("topdown.png"),
+            points,
+            planes,
+            trajectory,
+            config.output.topdown_slice(),
+        )?;
+        tracing::info!(
+            floor = ?top.floor,
+            left_out = top.outside_slice,
+            "topdown.png written"
+        );
         plot_list.push(("Top-down map".to_string(), "topdown.png".to_string()));
         plots::trajectory_png(
             &out.join("trajectory.png"),
-            &[("poses", trajectory.clone())],
+            "Trajectory (world frame, top-down)",
+            &[plots::TrajectorySeries {
+                name: "poses".into(),
+                colour: [0, 0, 0],
+                width: 2,
+                points: trajectory.iter().map(|p| [p[0], p[1]]).collect(),
+            }],
         )?;
         plot_list.push(("Trajectory".to_string(), "trajectory.png".to_string()));
     }

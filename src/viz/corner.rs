@@ -1,15 +1,16 @@
 //! The "mapping around the corner" figure: the same classified map twice,
 //! top-down, with the reflections where the sensor measured them (virtual
 //! points behind the mirror) and after mirror-back (on the real objects).
+//! Both panels draw [`corner_layers`] in order, the legend is beside them.
 
 use std::path::Path;
 
-use plotters::prelude::*;
-
-use super::plots::{
-    equal_ranges, plane_outlines, plot_err, render, rgb, top_view_chart, trajectory_and_legend,
-    TopView,
-};
+use super::legend::{draw_legend, PixelRect};
+use super::plots::{plot_err, render, TopView};
+use super::topdown::{corner_layers, draw_panel, legend_entries, view_ranges, PanelDrawn};
+use crate::io::MapPoint;
+use crate::reflect::BoundedPlane;
+use crate::Result;
 
 /// Sizes of the figure's two panels.
 const PANEL: TopView = TopView {
@@ -20,86 +21,68 @@ const PANEL: TopView = TopView {
     axis_desc: 16,
     light_grid: false,
 };
-use crate::classify::Class;
-use crate::io::map_ply::class_colour;
-use crate::io::MapPoint;
-use crate::reflect::BoundedPlane;
-use crate::Result;
+/// Width of the legend panel, px.
+const LEGEND_WIDTH: u32 = 300;
 
-/// Most points drawn per panel (a regular subsample beyond).
-const MAX_POINTS: usize = 150_000;
+/// What the figure drew.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CornerDrawn {
+    /// The two panels: reflections as measured, then mirrored back.
+    pub panels: [PanelDrawn; 2],
+    /// The legend's frame in image pixels (beside the panels).
+    pub legend: PixelRect,
+}
 
 /// Draw `path`: two top-down panels sharing their axes, `before` (reflections
 /// as measured) and `after` (reflections mirrored back), each with the
-/// reflective planes' outlines and the trajectory.
+/// reflective planes' outlines and the trajectory, and one legend beside
+/// them.
 pub fn around_corner_png(
     path: &Path,
     before: &[MapPoint],
     after: &[MapPoint],
     planes: &[BoundedPlane],
     trajectory: &[[f64; 2]],
-) -> Result<()> {
-    let (w, h) = (2000u32, 950u32);
-    let xy = |p: &MapPoint| [f64::from(p.xyz[0]), f64::from(p.xyz[1])];
-    let (xr, yr) = equal_ranges(
-        before
-            .iter()
-            .chain(after)
-            .map(xy)
-            .chain(trajectory.iter().copied()),
-        1.0,
-        f64::from(w / 2 - 80),
+) -> Result<CornerDrawn> {
+    let (w, h) = (2000 + LEGEND_WIDTH, 950u32);
+    let both: Vec<MapPoint> = before.iter().chain(after).copied().collect();
+    let ranges = view_ranges(
+        &both,
+        planes,
+        trajectory,
+        f64::from(w / 2 - LEGEND_WIDTH / 2 - 80),
         f64::from(h - 120),
     );
-    let panels = [
-        (
-            "Reflections as measured (virtual, behind the mirror)",
-            before,
-        ),
-        ("Reflections mirrored back (around the corner)", after),
+    let titles = [
+        "Reflections as measured (virtual, behind the mirror)",
+        "Reflections mirrored back (around the corner)",
     ];
+    let mut drawn = None;
     render(path, (w, h), |root| {
-        for (area, (title, points)) in root.split_evenly((1, 2)).iter().zip(panels) {
-            let mut chart = top_view_chart(area, title, (xr.clone(), yr.clone()), &PANEL, path)?;
-            let step = points.len().div_ceil(MAX_POINTS).max(1);
-            for (class, mirrored, name, size) in [
-                (Class::Normal, false, "normal", 1),
-                (Class::Obstacle, false, "obstacle behind glass", 1),
-                (Class::Glass, false, "reflective surface", 1),
-                (Class::Reflection, false, "reflection, measured", 2),
-                (Class::Reflection, true, "reflection, mirrored back", 2),
-            ] {
-                let colour = rgb(class_colour(class, mirrored));
-                let drawn: Vec<_> = points
-                    .iter()
-                    .step_by(step)
-                    .filter(|p| p.class == class && p.mirrored == mirrored)
-                    .map(|p| Circle::new((xy(p)[0], xy(p)[1]), size, colour.filled()))
-                    .collect();
-                if drawn.is_empty() {
-                    continue;
-                }
-                chart
-                    .draw_series(drawn)
-                    .map_err(|e| plot_err(path, e))?
-                    .label(name)
-                    .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
-            }
-            let mut labelled = false;
-            for (_, line) in plane_outlines(planes) {
-                let colour = RGBColor(170, 0, 200);
-                let series = chart
-                    .draw_series(LineSeries::new(line, colour.stroke_width(4)))
-                    .map_err(|e| plot_err(path, e))?;
-                if !labelled {
-                    labelled = true;
-                    series.label("mirror / glass plane").legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(3))
-                    });
-                }
-            }
-            trajectory_and_legend(&mut chart, trajectory, 16, path)?;
+        let (charts, legend_area) = root.split_horizontally(w - LEGEND_WIDTH);
+        let areas = charts.split_evenly((1, 2));
+        let mut panels = Vec::with_capacity(2);
+        for ((area, title), points) in areas.iter().zip(titles).zip([before, after]) {
+            panels.push(draw_panel(
+                area,
+                title,
+                ranges.clone(),
+                &PANEL,
+                corner_layers(),
+                points,
+                planes,
+                trajectory,
+                path,
+            )?);
         }
+        let entries = legend_entries(corner_layers(), &panels.iter().collect::<Vec<_>>());
+        let legend = draw_legend(&legend_area, &entries, 16, path)?;
+        drawn = Some((panels, legend));
         Ok(())
-    })
+    })?;
+    let (panels, legend) = drawn.ok_or_else(|| plot_err(path, "the drawing did not run"))?;
+    let panels: [PanelDrawn; 2] = panels
+        .try_into()
+        .map_err(|_| plot_err(path, "two panels expected"))?;
+    Ok(CornerDrawn { panels, legend })
 }

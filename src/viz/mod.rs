@@ -4,12 +4,17 @@
 //! | item | output |
 //! |---|---|
 //! | [`mcap::write_run_mcap`] | `run.mcap`: classified clouds, planes, poses (Foxglove) |
-//! | [`plots`] | `topdown.png`, `trajectory.png`, `metrics.png` |
+//! | [`topdown`] | `topdown.png`: the classified map from above, a height slice |
+//! | [`plots`] | `trajectory.png` (estimate and ground truth), `metrics.png` |
+//! | [`corner`] | the around-the-corner figure of `specular reproduce` |
 //! | [`report`] | `report.md` |
 
 pub mod corner;
+pub mod floor;
+pub mod legend;
 pub mod mcap;
 pub mod plots;
 pub mod report;
+pub mod topdown;
 
 pub use self::mcap::{write_run_mcap, McapRecorder, McapRun, McapSummary};

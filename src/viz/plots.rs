@@ -1,6 +1,6 @@
 //! PNG plots drawn with `plotters` (bitmap backend, embedded DejaVu Sans font,
-//! no system font libraries): a top-down map, the trajectories and the
-//! per-class scores.
+//! no system font libraries): the trajectories and the per-class scores,
+//! and what every plot shares (the top-down map is in [`super::topdown`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -9,17 +9,14 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
 
-use crate::classify::Class;
+use super::legend::{draw_legend, LegendEntry, Mark, PixelRect};
 use crate::eval::Metrics;
-use crate::io::map_ply::class_colour;
-use crate::io::MapPoint;
-use crate::reflect::BoundedPlane;
 use crate::{Error, Result};
 
 /// DejaVu Sans (Bitstream Vera licence, see `assets/DejaVuSans-LICENSE.txt`).
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
-/// Most points drawn in the top-down view (a regular subsample beyond).
-const MAX_DRAWN_POINTS: usize = 200_000;
+/// Width of the legend panel beside a trajectory plot, px.
+const LEGEND_WIDTH: u32 = 280;
 
 fn register_font() {
     static ONCE: Once = Once::new();
@@ -92,118 +89,51 @@ pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
     RGBColor(c[0], c[1], c[2])
 }
 
-/// The reflective extent of each plane as closed polylines (x, y): each
-/// pane, then the hull (drawn on top).
-pub(crate) fn plane_outlines(planes: &[BoundedPlane]) -> Vec<(bool, Vec<(f64, f64)>)> {
-    let mut out = Vec::new();
-    for bp in planes {
-        let mut ring = |vs: Vec<nalgebra::Point3<f64>>, pane: bool| {
-            if let Some(first) = vs.first().copied() {
-                let mut line: Vec<(f64, f64)> = vs.iter().map(|p| (p.x, p.y)).collect();
-                line.push((first.x, first.y));
-                out.push((pane, line));
-            }
-        };
-        if let Some(panes) = &bp.panes {
-            for pane in panes.iter() {
-                ring(
-                    pane.vertices().iter().map(|q| bp.chart.to_3d(q)).collect(),
-                    true,
-                );
-            }
-        }
-        ring(bp.boundary_3d(), false);
-    }
-    out
+/// One named path of a trajectory plot (x, y, world frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrajectorySeries {
+    /// Legend label, e.g. "estimated" or "ground truth".
+    pub name: String,
+    /// Line colour.
+    pub colour: [u8; 3],
+    /// Line width, px (a reference drawn wide and light stays visible
+    /// under an estimate that follows it closely).
+    pub width: u32,
+    /// The positions in order.
+    pub points: Vec<[f64; 2]>,
 }
 
-/// `topdown.png`: the classified map seen from above (points coloured by
-/// class), the reflective planes' hulls (purple) and panes (cyan) and the
-/// trajectory (black).
-pub fn topdown_png(
-    path: &Path,
-    points: &[MapPoint],
-    planes: &[BoundedPlane],
-    trajectory: &[[f64; 2]],
-) -> Result<()> {
-    let (w, h) = (1400u32, 1100u32);
-    let xy = |p: &MapPoint| [f64::from(p.xyz[0]), f64::from(p.xyz[1])];
-    let (xr, yr) = equal_ranges(
-        points.iter().map(xy).chain(trajectory.iter().copied()),
-        1.0,
-        f64::from(w - 90),
-        f64::from(h - 110),
-    );
-    render(path, (w, h), |root| {
-        let mut chart = top_view_chart(
-            root,
-            "Classified map, top-down (world frame)",
-            (xr, yr),
-            &TopView::LARGE.with_caption(28),
-            path,
-        )?;
-        let step = points.len().div_ceil(MAX_DRAWN_POINTS).max(1);
-        for (class, name) in [
-            (Class::Normal, "normal"),
-            (Class::Obstacle, "obstacle behind glass"),
-            (Class::Reflection, "reflection (measured)"),
-            (Class::Glass, "reflective surface"),
-        ] {
-            let colour = rgb(class_colour(class, false));
-            let drawn = points
-                .iter()
-                .step_by(step)
-                .filter(|p| p.class == class)
-                .map(|p| Circle::new((xy(p)[0], xy(p)[1]), 1, colour.filled()));
-            chart
-                .draw_series(drawn)
-                .map_err(|e| plot_err(path, e))?
-                .label(name)
-                .legend(move |(x, y)| Circle::new((x + 8, y), 4, colour.filled()));
-        }
-        let mut labelled = [false; 2];
-        for (pane, line) in plane_outlines(planes) {
-            let colour = if pane {
-                RGBColor(0, 190, 210)
-            } else {
-                RGBColor(170, 0, 200)
-            };
-            let width = if pane { 5 } else { 2 };
-            let series = chart
-                .draw_series(LineSeries::new(line, colour.stroke_width(width)))
-                .map_err(|e| plot_err(path, e))?;
-            if !labelled[pane as usize] {
-                labelled[pane as usize] = true;
-                series
-                    .label(if pane {
-                        "reflective pane"
-                    } else {
-                        "reflective plane hull"
-                    })
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(3))
-                    });
-            }
-        }
-        trajectory_and_legend(&mut chart, trajectory, 18, path)
-    })
+/// What a trajectory plot drew.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrajectoryDrawn {
+    /// The chart's data area in image pixels.
+    pub data_area: PixelRect,
+    /// The legend's frame in image pixels (beside the chart).
+    pub legend: PixelRect,
 }
 
 /// `trajectory.png`: named trajectories (x, y, world frame), e.g. estimated
-/// and true; dots mark the poses, a large dot each start.
-pub fn trajectory_png(path: &Path, series: &[(&str, Vec<[f64; 2]>)]) -> Result<()> {
-    let (w, h) = (1000u32, 800u32);
+/// and true, drawn in order (the first at the bottom); dots mark the
+/// poses, a large dot each start; `caption` says what is compared. The
+/// legend is beside the chart.
+pub fn trajectory_png(
+    path: &Path,
+    caption: &str,
+    series: &[TrajectorySeries],
+) -> Result<TrajectoryDrawn> {
+    let (w, h) = (1000 + LEGEND_WIDTH, 800u32);
     let (xr, yr) = equal_ranges(
-        series.iter().flat_map(|(_, s)| s.iter().copied()),
+        series.iter().flat_map(|s| s.points.iter().copied()),
         0.1,
-        f64::from(w - 90),
+        f64::from(w - LEGEND_WIDTH - 90),
         f64::from(h - 110),
     );
-    let palette = [BLACK, RGBColor(220, 30, 30), RGBColor(30, 90, 255)];
+    let mut drawn = None;
     render(path, (w, h), |root| {
+        let (chart_area, legend_area) = root.split_horizontally(w - LEGEND_WIDTH);
         let mut chart = top_view_chart(
-            root,
-            "Trajectory (world frame, top-down)",
+            &chart_area,
+            caption,
             (xr, yr),
             &TopView {
                 light_grid: true,
@@ -211,40 +141,44 @@ pub fn trajectory_png(path: &Path, series: &[(&str, Vec<[f64; 2]>)]) -> Result<(
             },
             path,
         )?;
-        for (i, (name, s)) in series.iter().enumerate() {
-            let colour = palette[i % palette.len()];
+        for s in series {
+            let colour = rgb(s.colour);
             chart
                 .draw_series(LineSeries::new(
-                    s.iter().map(|p| (p[0], p[1])),
-                    colour.stroke_width(2),
+                    s.points.iter().map(|p| (p[0], p[1])),
+                    colour.stroke_width(s.width),
                 ))
-                .map_err(|e| plot_err(path, e))?
-                .label(*name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
-                });
+                .map_err(|e| plot_err(path, e))?;
             chart
                 .draw_series(
-                    s.iter()
+                    s.points
+                        .iter()
                         .map(|p| Circle::new((p[0], p[1]), 2, colour.filled())),
                 )
                 .map_err(|e| plot_err(path, e))?;
             chart
                 .draw_series(
-                    s.first()
+                    s.points
+                        .first()
                         .map(|p| Circle::new((p[0], p[1]), 6, colour.filled())),
                 )
                 .map_err(|e| plot_err(path, e))?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 18))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
-            .map_err(|e| plot_err(path, e))
-    })
+        let entries: Vec<LegendEntry> = series
+            .iter()
+            .map(|s| LegendEntry {
+                mark: Mark::Line(s.colour, s.width),
+                label: s.name.clone(),
+            })
+            .collect();
+        let legend = draw_legend(&legend_area, &entries, 18, path)?;
+        drawn = Some(TrajectoryDrawn {
+            data_area: PixelRect::of(&chart.plotting_area().strip_coord_spec()),
+            legend,
+        });
+        Ok(())
+    })?;
+    drawn.ok_or_else(|| plot_err(path, "the drawing did not run"))
 }
 
 /// `metrics.png`: precision, recall and IoU (%) of every scored class as
@@ -395,35 +329,4 @@ where
     }
     mesh.draw().map_err(|e| plot_err(path, e))?;
     Ok(chart)
-}
-
-/// The top-view charts' last layers: the trajectory as a black line (when
-/// any) and the legend, upper right, with labels of `font` pixels.
-pub(crate) fn trajectory_and_legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
-    trajectory: &[[f64; 2]],
-    font: u32,
-    path: &Path,
-) -> Result<()>
-where
-    DB::ErrorType: 'static,
-{
-    if !trajectory.is_empty() {
-        chart
-            .draw_series(LineSeries::new(
-                trajectory.iter().map(|p| (p[0], p[1])),
-                BLACK.stroke_width(2),
-            ))
-            .map_err(|e| plot_err(path, e))?
-            .label("trajectory")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.stroke_width(2)));
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", font))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| plot_err(path, e))
 }
