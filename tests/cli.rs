@@ -181,6 +181,99 @@ fn a_frame_without_a_pose_is_named() {
     );
 }
 
+/// Poses stamped in nanoseconds (as ROS writes them) against frames named
+/// in seconds: the error says which side looks like nanoseconds.
+#[test]
+fn nanosecond_timestamps_are_diagnosed() {
+    let sample = common::sample_dir();
+    let poses = tempfile::NamedTempFile::new().unwrap();
+    std::fs::write(
+        poses.path(),
+        "1689496219652560000 0 0 0 0 0 0 1\n1689496220652560000 0 0 0 0 0 0 1\n",
+    )
+    .unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&sample.join("frames")),
+        "--poses",
+        s(poses.path()),
+        "--out",
+        s(out.path()),
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains("pose timestamps look like nanoseconds"),
+        "{err}"
+    );
+}
+
+/// Ctrl-C during a run: the run stops with a non-zero status, removes its
+/// temporary files (the recording and the partial predictions) and leaves
+/// its `INCOMPLETE` marker.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_removes_its_temporary_files_and_stays_marked() {
+    let sample = common::sample_dir().join("frames");
+    let frames = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(sample.join("1689496219.652560.ply")).unwrap();
+    // Long enough that the run is still going when it is interrupted.
+    for k in 0..400 {
+        let name = format!("{:.6}.ply", 1_689_496_219.0 + 0.1 * k as f64);
+        std::fs::write(frames.path().join(name), &bytes).unwrap();
+    }
+    let out = tempfile::tempdir().unwrap();
+    let run = out.path().join("run");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specular"))
+        .args([
+            "detect",
+            "--frames",
+            s(frames.path()),
+            "--out",
+            s(&run),
+            "--method",
+            "single-scan",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run specular");
+    // Wait until the run has written a temporary file, then interrupt it.
+    let started = std::time::Instant::now();
+    let temporary = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".tmp") || n.ends_with(".partial"))
+            .collect()
+    };
+    while temporary(&run).is_empty() {
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(60),
+            "the run wrote no temporary file"
+        );
+        assert!(child.try_wait().unwrap().is_none(), "the run ended early");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    assert!(!o.status.success(), "an interrupted run reported success");
+    assert!(stderr(&o).contains("interrupted"), "{}", stderr(&o));
+    assert!(run.join("INCOMPLETE").exists());
+    assert!(
+        temporary(&run).is_empty(),
+        "left behind: {:?}",
+        temporary(&run)
+    );
+}
+
 #[test]
 fn eval_rejects_predictions_of_the_wrong_length() {
     let sample = common::sample_dir();

@@ -6,9 +6,11 @@
 //! labels and plots beside fresh metrics, or a killed run's files with no
 //! sign that it stopped. So a run writes into a directory that holds
 //! nothing else, and an `INCOMPLETE` file says so until it succeeds; a run
-//! killed outright (no chance to clean up) leaves the marker behind.
+//! killed outright (no chance to clean up) leaves the marker behind, and
+//! one interrupted (Ctrl-C, SIGTERM) removes its temporary files first.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, Once};
 
 use anyhow::{bail, Context, Result};
 
@@ -36,6 +38,70 @@ const RUN_OUTPUTS: [&str; 17] = [
     ".png",
     ".tmp",
 ];
+
+/// The output directories of the runs still in progress, cleaned of their
+/// temporary files when the process is interrupted.
+static IN_PROGRESS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Whether `name` is a temporary file or directory of a run (renamed into
+/// place when the run finishes).
+fn is_temporary(name: &str) -> bool {
+    name == "predictions.partial"
+        || name.ends_with(".tmp")
+        || (name.starts_with('.') && name.contains(".tmp"))
+}
+
+/// On Ctrl-C or SIGTERM: remove the temporary files of every run in
+/// progress, note the interruption in its marker, and exit with 130.
+fn on_interrupt() {
+    let dirs = IN_PROGRESS.lock().map(|d| d.clone()).unwrap_or_default();
+    for dir in dirs {
+        // The run's threads go on writing meanwhile: sweep until clean.
+        for _ in 0..5 {
+            let mut left = false;
+            for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+                if is_temporary(&entry.file_name().to_string_lossy()) {
+                    let p = entry.path();
+                    let removed = if p.is_dir() {
+                        std::fs::remove_dir_all(&p)
+                    } else {
+                        std::fs::remove_file(&p)
+                    };
+                    left |= removed.is_err();
+                }
+            }
+            if !left {
+                break;
+            }
+        }
+        let _ = std::fs::write(
+            dir.join(INCOMPLETE),
+            format!(
+                "specular {} (commit {}): this run was interrupted; its outputs are incomplete.\n",
+                specular::VERSION,
+                specular::GIT_COMMIT
+            ),
+        );
+        eprintln!(
+            "interrupted: the outputs in {} are incomplete (see its {INCOMPLETE} file)",
+            dir.display()
+        );
+    }
+    std::process::exit(130);
+}
+
+/// Install the interrupt handler once per process (a failure to install
+/// it only costs the clean-up, so it is not an error).
+fn install_interrupt_handler() {
+    static INSTALL: Once = Once::new();
+    INSTALL.call_once(|| {
+        if let Err(e) = ctrlc::set_handler(on_interrupt) {
+            tracing::warn!(
+                "no interrupt handler ({e}): an interrupted run keeps its temporary files"
+            );
+        }
+    });
+}
 
 /// Whether `name` is something a run writes (or its temporary file).
 fn is_run_output(name: &str) -> bool {
@@ -108,6 +174,10 @@ impl RunDir {
             ),
         )
         .with_context(|| format!("writing {}", marker.display()))?;
+        install_interrupt_handler();
+        if let Ok(mut dirs) = IN_PROGRESS.lock() {
+            dirs.push(path.to_path_buf());
+        }
         Ok(Self {
             path: path.to_path_buf(),
             created,
@@ -129,6 +199,9 @@ impl Drop for RunDir {
     /// left nothing else removes the marker too (and the directory, if it
     /// created it).
     fn drop(&mut self) {
+        if let Ok(mut dirs) = IN_PROGRESS.lock() {
+            dirs.retain(|d| d != &self.path);
+        }
         if self.finished {
             return;
         }

@@ -95,13 +95,21 @@ impl TrajectoryError {
                 self.path_length, self.rpe_segment
             )
         };
+        // A percentage of a path shorter than one segment says nothing.
+        let drift = if self.path_length >= self.rpe_segment {
+            format!(
+                "drift {:.2} % ({:.3} m over {:.1} m, from the first pose)",
+                self.drift_percent, self.final_error, self.path_length
+            )
+        } else {
+            format!(
+                "final error {:.3} m from the first pose (no drift percentage over a {:.1} m path)",
+                self.final_error, self.path_length
+            )
+        };
         format!(
-            "ATE RMSE {:.3} m (max {:.3}) after SE(3) alignment, {rpe}, drift {:.2} % ({:.3} m over {:.1} m, from the first pose)",
-            self.ate_rmse,
-            self.ate_max,
-            self.drift_percent,
-            self.final_error,
-            self.path_length
+            "ATE RMSE {:.3} m (max {:.3}) after SE(3) alignment, {rpe}, {drift}",
+            self.ate_rmse, self.ate_max,
         )
     }
 }
@@ -210,6 +218,20 @@ mod tests {
                 )
             })
             .collect()
+    }
+
+    #[test]
+    fn a_path_shorter_than_a_segment_reports_no_percentages() {
+        let truth: Vec<Isometry3<f64>> = (0..3)
+            .map(|k| Isometry3::translation(0.01 * k as f64, 0.0, 0.0))
+            .collect();
+        let est: Vec<Isometry3<f64>> = (0..3)
+            .map(|k| Isometry3::translation(0.012 * k as f64, 0.0, 0.0))
+            .collect();
+        let e = trajectory_error(&est, &truth, 1.0).unwrap();
+        let text = e.summary();
+        assert!(!text.contains('%') && !text.contains("NaN"), "{text}");
+        assert!(text.contains("final error 0.004 m"), "{text}");
     }
 
     #[test]

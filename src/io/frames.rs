@@ -168,9 +168,10 @@ pub fn match_poses_with(
                 return Ok(nearest.pose);
             }
             let far = format!(
-                "no pose within {tolerance} s of frame {} (nearest is {} s away)",
+                "no pose within {tolerance} s of frame {} (nearest is {} s away){}",
                 f.name,
-                secs(d)
+                secs(d),
+                unit_hint(f.stamp, nearest.stamp)
             );
             match (before, after) {
                 (Some(a), Some(b)) if max_gap > 0.0 => {
@@ -196,6 +197,32 @@ pub fn match_poses_with(
             }
         })
         .collect()
+}
+
+/// A hint when a frame's and a pose's timestamps differ by a factor of
+/// about 1e3, 1e6 or 1e9: one of them is in milli-, micro- or nanoseconds
+/// where seconds are expected (ROS bags stamp in nanoseconds).
+fn unit_hint(frame: f64, pose: f64) -> String {
+    if !(frame > 0.0 && pose > 0.0) {
+        return String::new();
+    }
+    let decades = (frame / pose).log10();
+    let (bigger, factor) = if decades > 0.0 {
+        ("frame", decades)
+    } else {
+        ("pose", -decades)
+    };
+    let unit = [(3.0, "milli"), (6.0, "micro"), (9.0, "nano")]
+        .into_iter()
+        .find(|(d, _)| (factor - d).abs() < 0.5)
+        .map(|(_, u)| u);
+    match unit {
+        Some(u) => format!(
+            "; the {bigger} timestamps look like {u}seconds, both must be seconds \
+             (e.g. a frame named 1689496219.652560.ply)"
+        ),
+        None => String::new(),
+    }
 }
 
 /// The poses of `frames` from the pose file at `path`: TUM (timestamped,
