@@ -80,6 +80,10 @@ pub struct DecisionParams {
     pub free_space_test: bool,
     /// A return this much farther than the mirrored point proves free space, m.
     pub free_space_margin: f64,
+    /// ... plus this share of the mirrored point's range: an error in the
+    /// plane's orientation moves mirrored points in proportion to their
+    /// distance (0: a fixed margin, as Zhao 2020).
+    pub free_space_margin_ratio: f64,
     /// Cells around the mirrored point's cell that must all show free space
     /// (0: the cell alone, as Zhao 2020; 1: the 3 × 3 block, robust to the
     /// ring and column quantisation of the mirrored direction).
@@ -153,6 +157,7 @@ impl Default for DecisionParams {
             depth_margin: 0.0,
             free_space_test: true,
             free_space_margin: 0.1,
+            free_space_margin_ratio: 0.0,
             free_space_neighbourhood: 0,
             obstacle_tests_on_all_returns: false,
             support_test: false,
@@ -467,7 +472,9 @@ pub fn decide_with_hits(
         }
         if tests_apply && params.free_space_test {
             if let Some((_, far)) = along_beam {
-                if far > mirrored_range + params.free_space_margin {
+                let margin =
+                    params.free_space_margin + params.free_space_margin_ratio * mirrored_range;
+                if far > mirrored_range + margin {
                     (classes[i], rules[i]) = (Class::Obstacle, Rule::FrameFreeSpace);
                     continue;
                 }

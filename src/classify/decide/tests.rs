@@ -31,7 +31,9 @@ fn two_panes() -> Vec<BoundedPlane> {
 }
 
 /// One frame holding only `points` (sensor frame, single returns).
+/// Each point's ring is the QT64 ring nearest its elevation.
 fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     Frame {
         name: "synthetic".into(),
         points: points
@@ -39,7 +41,9 @@ fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
             .map(|&xyz| Point {
                 xyz,
                 intensity,
-                ring: 0,
+                ring: sensor
+                    .ring_of(&Point3::new(xyz[0] as f64, xyz[1] as f64, xyz[2] as f64))
+                    .unwrap_or(0) as u16,
                 ret: 1,
                 label: 0,
             })
@@ -358,4 +362,37 @@ fn past_a_second_pane_the_echo_strength_decides_pane_by_pane() {
         classify(&points, 100.0, &planes, &on),
         [Class::Unclassified]
     );
+}
+
+/// The frame's free-space test with a margin that grows with range: the
+/// frame sees a wall 0.15 m beyond the mirror image of a point 8 m behind
+/// the pane (3 m in front of the sensor), as an error of half a degree in
+/// the plane's orientation puts it. A fixed 0.1 m margin calls the point
+/// an Obstacle; 5 % of the range more leaves it to the other evidence.
+#[test]
+fn the_free_space_margin_grows_with_the_mirrored_range() {
+    let planes = pane();
+    let behind = Point3::new(13.0f64, 0.2, 0.3);
+    let mirrored = planes[0].plane.mirror(&behind);
+    let wall = mirrored.coords * ((mirrored.coords.norm() + 0.15) / mirrored.coords.norm());
+    let points = [
+        [behind.x as f32, behind.y as f32, behind.z as f32],
+        [wall.x as f32, wall.y as f32, wall.z as f32],
+    ];
+    let fixed = DecisionParams {
+        free_space_test: true,
+        obstacle_tests_on_all_returns: true,
+        ..rule_only(false)
+    };
+    let d = decide_in(&points, 50.0, &planes, &fixed, &SpaceMap::new(0.1, 2, 1));
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Obstacle, Rule::FrameFreeSpace)
+    );
+    let growing = DecisionParams {
+        free_space_margin_ratio: 0.05,
+        ..fixed
+    };
+    let d = decide_in(&points, 50.0, &planes, &growing, &SpaceMap::new(0.1, 2, 1));
+    assert_eq!(d.classes[0], Class::Unclassified);
 }
