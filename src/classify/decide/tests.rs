@@ -396,3 +396,106 @@ fn the_free_space_margin_grows_with_the_mirrored_range() {
     let d = decide_in(&points, 50.0, &planes, &growing, &SpaceMap::new(0.1, 2, 1));
     assert_eq!(d.classes[0], Class::Unclassified);
 }
+
+/// The decisions for points given with their return number (1 or 2; the
+/// same direction pairs two returns of one beam).
+fn decide_returns(points: &[([f32; 3], u8)], params: &DecisionParams) -> Decisions {
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    let xyz: Vec<[f32; 3]> = points.iter().map(|p| p.0).collect();
+    let mut f = frame(&xyz, 50.0);
+    for (point, &(_, ret)) in f.points.iter_mut().zip(points) {
+        point.ret = ret;
+    }
+    let scan = OrganizedScan::build(&f, &sensor).unwrap();
+    let planes = pane();
+    let beams = BeamPlanes::hulls(&planes, 0.0);
+    let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
+    decide_with_hits(&f, &scan, &sensor, &planes, &hits, params, None, None)
+}
+
+/// The depth test (Zhao 2020): a point behind the pane deeper than any
+/// indoor point is in front of it is an Obstacle. The room reaches 3 m in
+/// front of the pane (a Normal point at x = 2); a point 4 m behind it is
+/// deeper.
+#[test]
+fn a_point_deeper_than_the_room_is_an_obstacle() {
+    let points = [([2.0f32, -1.0, 0.0], 1), ([9.0, 0.2, 0.3], 1)];
+    let on = DecisionParams {
+        depth_test: true,
+        depth_margin: 0.1,
+        obstacle_tests_on_all_returns: true,
+        ..rule_only(false)
+    };
+    let d = decide_returns(&points, &on);
+    assert_eq!((d.classes[1], d.rules[1]), (Class::Obstacle, Rule::Depth));
+    assert_eq!(
+        decide_returns(&points, &rule_only(false)).classes[1],
+        Class::Unclassified
+    );
+    // A point 2 m behind is shallower than the room: the test is silent.
+    let shallow = [([2.0f32, -1.0, 0.0], 1), ([7.0, 0.2, 0.3], 1)];
+    assert_eq!(
+        decide_returns(&shallow, &on).classes[1],
+        Class::Unclassified
+    );
+}
+
+/// Support: a point behind the pane whose mirror image lands on a Normal
+/// point of the frame is a Reflection; off, it is undecided.
+#[test]
+fn a_mirror_image_on_an_observed_surface_is_a_reflection() {
+    let planes = pane();
+    let behind = Point3::new(7.0f64, 0.2, 0.3);
+    let image = planes[0].plane.mirror(&behind);
+    let points = [
+        ([behind.x as f32, behind.y as f32, behind.z as f32], 1),
+        ([image.x as f32, image.y as f32 + 0.05, image.z as f32], 1),
+    ];
+    let on = DecisionParams {
+        support_test: true,
+        support_radius: 0.316,
+        ..rule_only(false)
+    };
+    let d = decide_returns(&points, &on);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::Support)
+    );
+    assert_eq!(
+        decide_returns(&points, &rule_only(false)).classes[0],
+        Class::Unclassified
+    );
+}
+
+/// The dual-return rule: where a beam's far return is an Obstacle behind
+/// the pane, its near return behind the same pane is a Reflection.
+#[test]
+fn the_near_return_of_an_obstacle_beam_is_a_reflection() {
+    // Two returns along one direction: 1 m and 4 m behind the pane; the
+    // far one deeper than the room (a Normal point 3 m in front).
+    let dir = Vector3::new(1.0f64, 0.04, 0.06).normalize();
+    let at = |x: f64| {
+        let p = dir * (x / dir.x);
+        [p.x as f32, p.y as f32, p.z as f32]
+    };
+    let points = [([2.0f32, -1.0, 0.0], 1), (at(6.0), 1), (at(9.0), 2)];
+    let depth_only = DecisionParams {
+        depth_test: true,
+        depth_margin: 0.1,
+        ..rule_only(false)
+    };
+    let without = decide_returns(&points, &depth_only);
+    assert_eq!(without.classes[2], Class::Obstacle);
+    assert_eq!(without.classes[1], Class::Unclassified);
+    let with = decide_returns(
+        &points,
+        &DecisionParams {
+            dual_return_rule: true,
+            ..depth_only
+        },
+    );
+    assert_eq!(
+        (with.classes[1], with.rules[1]),
+        (Class::Reflection, Rule::DualReturn)
+    );
+}
