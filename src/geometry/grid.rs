@@ -48,6 +48,11 @@ pub struct EvidenceGrid {
     pub echo_reach: f64,
     /// Votes needed (over a cell and its 8 neighbours) to decide.
     pub min_votes: u32,
+    /// A cell without votes of its own is decided by its neighbours only
+    /// when voted cells lie on two opposite sides of it (a hole inside a
+    /// region), never from one side (the region's edge): otherwise every
+    /// region grows by a cell beyond its last vote.
+    pub fill_between_votes_only: bool,
     /// Single echoes on the plane brighter than this are from an opaque
     /// surface (set from the plane's own glass echoes; `None`: unknown).
     pub opaque_intensity: Option<f32>,
@@ -91,6 +96,7 @@ impl EvidenceGrid {
             min_echo_fraction: 0.0,
             echo_reach: 0.0,
             min_votes,
+            fill_between_votes_only: false,
             opaque_intensity: None,
             glass_echo_intensity: None,
             peak_cos: 1.0,
@@ -337,6 +343,9 @@ impl EvidenceGrid {
 
     fn vote_state(&self, index: usize) -> Surface {
         let (i, j) = ((index % self.cols) as isize, (index / self.cols) as isize);
+        if self.fill_between_votes_only && self.votes_at(i, j) == 0 && !self.between_votes(i, j) {
+            return Surface::Unknown;
+        }
         let (mut t, mut o, mut e) = (0u32, 0u32, 0u32);
         for dj in -1..=1 {
             for di in -1..=1 {
@@ -360,6 +369,23 @@ impl EvidenceGrid {
         }
     }
 
+    /// All votes of cell (`i`, `j`); 0 outside the grid.
+    fn votes_at(&self, i: isize, j: isize) -> u32 {
+        if i < 0 || j < 0 || i as usize >= self.cols || j as usize >= self.rows {
+            return 0;
+        }
+        let k = j as usize * self.cols + i as usize;
+        self.transparent[k] + self.opaque[k] + self.open[k]
+    }
+
+    /// Whether cell (`i`, `j`) has voted neighbours on two opposite sides
+    /// (left and right, below and above, or along either diagonal).
+    fn between_votes(&self, i: isize, j: isize) -> bool {
+        [(1, 0), (0, 1), (1, 1), (1, -1)]
+            .iter()
+            .any(|&(di, dj)| self.votes_at(i + di, j + dj) > 0 && self.votes_at(i - di, j - dj) > 0)
+    }
+
     /// The state at chart coordinates `uv` (Unknown outside the grid).
     pub fn state(&self, uv: &Point2<f64>) -> Surface {
         self.index(uv)
@@ -370,6 +396,24 @@ impl EvidenceGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn without_own_votes_only_holes_are_filled() {
+        let mut g =
+            EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(1.0, 1.0), 0.2, 1, 100).unwrap();
+        // Transparent votes in columns 1 and 3 of row 2; none in column 2
+        // (a hole) or column 4 (beyond the edge).
+        for i in [1, 3] {
+            g.vote(&g.centre(2 * g.cols + i), 2, 0);
+        }
+        let edge = 2 * g.cols + 4;
+        let hole = 2 * g.cols + 2;
+        assert_eq!(g.cell_state(edge), Surface::Transparent);
+        assert_eq!(g.cell_state(hole), Surface::Transparent);
+        g.fill_between_votes_only = true;
+        assert_eq!(g.cell_state(edge), Surface::Unknown);
+        assert_eq!(g.cell_state(hole), Surface::Transparent);
+    }
 
     #[test]
     fn majority_of_the_neighbourhood_decides() {

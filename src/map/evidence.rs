@@ -64,6 +64,12 @@ pub struct EvidenceParams {
     pub echo_reach: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
+    /// A cell without votes of its own is decided by its neighbours only
+    /// inside a region (voted cells on opposite sides), never at its edge:
+    /// the 3 x 3 majority otherwise grows every pane by a cell (0.2 m)
+    /// beyond its last vote, over the wall around a whiteboard or a
+    /// screen.
+    pub fill_between_votes_only: bool,
     /// A surface echo votes "glass" only if the surface around it (its
     /// neighbours in the scan) is within this angle of the plane, degrees
     /// (0: no test). Where another pane or a wall cuts the plane, its echoes
@@ -103,6 +109,7 @@ impl Default for EvidenceParams {
             min_echo_fraction: 0.0,
             echo_reach: 0.0,
             max_cells: 4_000_000,
+            fill_between_votes_only: false,
             echo_normal_max_deg: 0.0,
             echo_owner_test: false,
             crossing_radius: 0.0,
@@ -193,6 +200,7 @@ impl EvidenceGatherer {
         )?;
         empty.min_echo_fraction = params.min_echo_fraction;
         empty.echo_reach = params.echo_reach;
+        empty.fill_between_votes_only = params.fill_between_votes_only;
         Some(Self {
             landmark: landmark.clone(),
             others: Vec::new(),
