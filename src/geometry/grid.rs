@@ -38,6 +38,14 @@ pub struct EvidenceGrid {
     /// The transparent votes that were echoes from the surface itself
     /// (row-major); glass and mirrors return them, openings do not.
     pub echo: Vec<u32>,
+    /// Beams that passed the plane within a few degrees of its normal with
+    /// no echo from it (row-major): glass returns a strong echo there, so
+    /// these passed an opening.
+    pub bare: Vec<u32>,
+    /// A transparent cell with at least this many bare passes over it and
+    /// its 8 neighbours, and no surface echo there, is an opening
+    /// ([`Surface::Open`]; 0: off).
+    pub min_bare_passes: u32,
     /// A transparent region whose echo votes are fewer than this share of
     /// its transparent votes is an opening ([`Surface::Open`]).
     pub min_echo_fraction: f64,
@@ -93,6 +101,8 @@ impl EvidenceGrid {
             opaque: vec![0; cols * rows],
             echo: vec![0; cols * rows],
             open: vec![0; cols * rows],
+            bare: vec![0; cols * rows],
+            min_bare_passes: 0,
             min_echo_fraction: 0.0,
             echo_reach: 0.0,
             min_votes,
@@ -134,6 +144,7 @@ impl EvidenceGrid {
             opaque: vec![0; self.opaque.len()],
             echo: vec![0; self.echo.len()],
             open: vec![0; self.open.len()],
+            bare: vec![0; self.bare.len()],
             states: Vec::new(),
             ..self.clone()
         }
@@ -155,6 +166,16 @@ impl EvidenceGrid {
                 }
             }
         }
+        if self.min_bare_passes > 0 {
+            let bare = self.neighbourhood_sums(&self.bare);
+            let echo = self.neighbourhood_sums(&self.echo);
+            for (k, state) in self.states.iter_mut().enumerate() {
+                if *state == Surface::Transparent && echo[k] == 0 && bare[k] >= self.min_bare_passes
+                {
+                    *state = Surface::Open;
+                }
+            }
+        }
         for region in self.regions(Surface::Transparent) {
             let t: u64 = region.iter().map(|&k| self.transparent[k] as u64).sum();
             let e: u64 = region.iter().map(|&k| self.echo[k] as u64).sum();
@@ -164,6 +185,23 @@ impl EvidenceGrid {
                 }
             }
         }
+    }
+
+    /// Per cell, the sum of `counts` over it and its 8 neighbours.
+    fn neighbourhood_sums(&self, counts: &[u32]) -> Vec<u32> {
+        let (cols, rows) = (self.cols as isize, self.rows as isize);
+        (0..self.cols * self.rows)
+            .map(|k| {
+                let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
+                let mut total = 0;
+                for y in (j - 1).max(0)..=(j + 1).min(rows - 1) {
+                    for x in (i - 1).max(0)..=(i + 1).min(cols - 1) {
+                        total += counts[(y * cols + x) as usize];
+                    }
+                }
+                total
+            })
+            .collect()
     }
 
     /// Per cell, whether a cell with a surface echo lies within `reach`
@@ -235,6 +273,14 @@ impl EvidenceGrid {
     pub fn vote_open(&mut self, uv: &Point2<f64>) {
         if let Some(k) = self.index(uv) {
             self.open[k] += 1;
+        }
+    }
+
+    /// Count a bare pass (a beam through the plane near its normal with no
+    /// echo from it) in the cell holding `uv`.
+    pub fn vote_bare(&mut self, uv: &Point2<f64>) {
+        if let Some(k) = self.index(uv) {
+            self.bare[k] += 1;
         }
     }
 
@@ -310,6 +356,9 @@ impl EvidenceGrid {
             *a += b;
         }
         for (a, b) in self.open.iter_mut().zip(&other.open) {
+            *a += b;
+        }
+        for (a, b) in self.bare.iter_mut().zip(&other.bare) {
             *a += b;
         }
     }
@@ -413,6 +462,26 @@ mod tests {
         g.fill_between_votes_only = true;
         assert_eq!(g.cell_state(edge), Surface::Unknown);
         assert_eq!(g.cell_state(hole), Surface::Transparent);
+    }
+
+    #[test]
+    fn bare_passes_near_normal_incidence_open_a_transparent_cell() {
+        let mut g =
+            EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(1.0, 1.0), 0.2, 1, 100).unwrap();
+        let c = g.centre(2 * g.cols + 2);
+        g.vote(&c, 5, 0);
+        for _ in 0..3 {
+            g.vote_bare(&c);
+        }
+        g.finalize();
+        assert_eq!(g.state(&c), Surface::Transparent);
+        g.min_bare_passes = 3;
+        g.finalize();
+        assert_eq!(g.state(&c), Surface::Open);
+        // A surface echo in the neighbourhood keeps it glass.
+        g.vote_echo(&g.centre(2 * g.cols + 3));
+        g.finalize();
+        assert_eq!(g.state(&c), Surface::Transparent);
     }
 
     #[test]

@@ -70,6 +70,14 @@ pub struct EvidenceParams {
     /// beyond its last vote, over the wall around a whiteboard or a
     /// screen.
     pub fill_between_votes_only: bool,
+    /// Beams through the plane within this angle of its normal that bring
+    /// no echo from it are bare passes, degrees (0: off): glass and mirrors
+    /// return a strong specular echo there, openings none.
+    pub bare_pass_max_deg: f64,
+    /// A transparent cell with at least this many bare passes over it and
+    /// its neighbours, and no surface echo among them, is an opening (the
+    /// wall between two screens on one plane, the gap beside a pane).
+    pub min_bare_passes: u32,
     /// A surface echo votes "glass" only if the surface around it (its
     /// neighbours in the scan) is within this angle of the plane, degrees
     /// (0: no test). Where another pane or a wall cuts the plane, its echoes
@@ -110,6 +118,8 @@ impl Default for EvidenceParams {
             echo_reach: 0.0,
             max_cells: 4_000_000,
             fill_between_votes_only: false,
+            bare_pass_max_deg: 0.0,
+            min_bare_passes: 0,
             echo_normal_max_deg: 0.0,
             echo_owner_test: false,
             crossing_radius: 0.0,
@@ -201,6 +211,11 @@ impl EvidenceGatherer {
         empty.min_echo_fraction = params.min_echo_fraction;
         empty.echo_reach = params.echo_reach;
         empty.fill_between_votes_only = params.fill_between_votes_only;
+        empty.min_bare_passes = if params.bare_pass_max_deg > 0.0 {
+            params.min_bare_passes
+        } else {
+            0
+        };
         Some(Self {
             landmark: landmark.clone(),
             others: Vec::new(),
@@ -415,6 +430,7 @@ fn vote_frame(
 ) -> Votes {
     let origin = Point3::origin();
     let cos_peak = p.peak_angle_deg.to_radians().cos();
+    let bare_cos = (p.bare_pass_max_deg > 0.0).then(|| p.bare_pass_max_deg.to_radians().cos());
     let echo_normal_cos =
         (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
     // Whether the echo at `x` (beam `dir`) lies on another landmark that
@@ -473,6 +489,16 @@ fn vote_frame(
                 grid.vote(&uv, 1, 0);
             } else {
                 grid.vote_open(&uv);
+            }
+            // Near normal incidence without an echo from the plane: bare.
+            if bare_cos.is_some_and(|c| plane.plane.normal.dot(&dir).abs() >= c) {
+                let echoed = f
+                    .scan
+                    .partner(i)
+                    .is_some_and(|j| (f.frame.points[j].range() - t).abs() <= p.surface_band);
+                if !echoed {
+                    grid.vote_bare(&uv);
+                }
             }
         } else if s.abs() <= p.surface_band {
             match f.scan.partner(i) {
@@ -578,6 +604,59 @@ mod tests {
         assert_eq!(state(&pane, door.0, door.1), Surface::Open);
         assert_eq!(state(&pane, above.0, above.1), Surface::Transparent);
         assert_eq!(state(&pane, aside.0, aside.1), Surface::Transparent);
+    }
+
+    /// Beams that pass the plane near its normal without an echo from it
+    /// passed an opening: the pane of [`pane_frame`] keeps its glass echoes
+    /// only left of azimuth -8 degrees; right of it (within 5 degrees of
+    /// the normal) the beams reach the wall behind with no echo. With bare
+    /// passes counted that stretch is open; without, it is glass like the
+    /// rest.
+    #[test]
+    fn bare_passes_near_normal_incidence_are_an_opening() {
+        use crate::geometry::grid::Surface;
+        use crate::geometry::Plane;
+        use crate::sensor::SensorModel;
+        use nalgebra::Vector3;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let mut frame = pane_frame(&sensor);
+        frame.points.retain(|p| {
+            let az = (p.xyz[1] as f64).atan2(p.xyz[0] as f64).to_degrees();
+            p.ret == 2 || az < -8.0
+        });
+        for p in &mut frame.points {
+            let az = (p.xyz[1] as f64).atan2(p.xyz[0] as f64).to_degrees();
+            if az >= -8.0 {
+                p.ret = 1;
+            }
+        }
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        let pane = BoundedPlane::from_points(
+            plane,
+            [(-1.8, -1.2), (0.4, -1.2), (0.4, 1.2), (-1.8, 1.2)]
+                .iter()
+                .map(|&(y, z)| Point3::new(5.0, y, z)),
+        );
+        let f = EvidenceFrame {
+            frame: &frame,
+            scan: &scan,
+            pose: Isometry3::identity(),
+        };
+        let off = EvidenceParams::default();
+        let on = EvidenceParams {
+            bare_pass_max_deg: 10.0,
+            min_bare_passes: 3,
+            ..off
+        };
+        let state = |params: &EvidenceParams, az_deg: f64| {
+            let grid = gather_evidence(&pane, &[f], params).unwrap();
+            let y = 5.0 * az_deg.to_radians().tan();
+            grid.state(&pane.chart.to_2d(&Point3::new(5.0, y, 0.0)))
+        };
+        assert_eq!(state(&off, 2.0), Surface::Transparent);
+        assert_eq!(state(&on, 2.0), Surface::Open);
+        assert_eq!(state(&on, -15.0), Surface::Transparent);
     }
 
     /// A pane at x = 5 seen head-on (glass echo, and a return from a wall
