@@ -16,6 +16,11 @@ fn main() -> std::process::ExitCode {
     }
     match cli::run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // Ctrl-C or SIGTERM: the shell's convention, 128 + SIGINT.
+        Err(_) if cli::interrupted() => {
+            eprintln!("interrupted: the run's outputs are incomplete (see its INCOMPLETE file)");
+            std::process::ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {}", message(&e));
             std::process::ExitCode::FAILURE

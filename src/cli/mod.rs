@@ -10,6 +10,8 @@ mod input;
 mod output;
 mod reproduce;
 mod run_dir;
+
+pub(crate) use run_dir::interrupted;
 mod simulate;
 mod slam;
 mod visual;

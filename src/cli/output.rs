@@ -139,6 +139,11 @@ impl FrameSink for RunWriter {
         pose: Option<&Isometry3<f64>>,
         output: FrameOutput,
     ) -> specular::Result<()> {
+        // After Ctrl-C nothing more is written (the handler is removing
+        // the partial predictions).
+        if super::run_dir::interrupted() {
+            return Err(specular::Error::Input("interrupted".into()));
+        }
         let ids: Vec<u8> = output.classes.iter().map(|c| c.id()).collect();
         io::write_labels(&self.partial.join(format!("{}.label", output.name)), &ids)?;
         if self.options.rules {

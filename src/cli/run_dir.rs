@@ -10,6 +10,7 @@
 //! one interrupted (Ctrl-C, SIGTERM) removes its temporary files first.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, Once};
 
 use anyhow::{bail, Context, Result};
@@ -43,6 +44,14 @@ const RUN_OUTPUTS: [&str; 17] = [
 /// temporary files when the process is interrupted.
 static IN_PROGRESS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
+/// Set on Ctrl-C or SIGTERM: the run's writers stop.
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Whether the process was interrupted (writers check it before writing).
+pub(crate) fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
 /// Whether `name` is a temporary file or directory of a run (renamed into
 /// place when the run finishes).
 fn is_temporary(name: &str) -> bool {
@@ -54,23 +63,26 @@ fn is_temporary(name: &str) -> bool {
 /// On Ctrl-C or SIGTERM: remove the temporary files of every run in
 /// progress, note the interruption in its marker, and exit with 130.
 fn on_interrupt() {
+    INTERRUPTED.store(true, Ordering::SeqCst);
     let dirs = IN_PROGRESS.lock().map(|d| d.clone()).unwrap_or_default();
     for dir in dirs {
-        // The run's threads go on writing meanwhile: sweep until clean.
+        // A write already under way when the flag was set may still land:
+        // sweep, wait for it, sweep again.
         for _ in 0..5 {
-            let mut left = false;
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            let mut found = false;
             for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
                 if is_temporary(&entry.file_name().to_string_lossy()) {
+                    found = true;
                     let p = entry.path();
-                    let removed = if p.is_dir() {
+                    let _ = if p.is_dir() {
                         std::fs::remove_dir_all(&p)
                     } else {
                         std::fs::remove_file(&p)
                     };
-                    left |= removed.is_err();
                 }
             }
-            if !left {
+            if !found {
                 break;
             }
         }
@@ -202,7 +214,8 @@ impl Drop for RunDir {
         if let Ok(mut dirs) = IN_PROGRESS.lock() {
             dirs.retain(|d| d != &self.path);
         }
-        if self.finished {
+        // An interrupted run stays marked, whatever it left.
+        if self.finished || interrupted() {
             return;
         }
         let only_marker = std::fs::read_dir(&self.path).is_ok_and(|entries| {
