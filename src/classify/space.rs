@@ -71,6 +71,9 @@ pub struct SpaceMap {
     min_passes: u8,
     block_hits: u8,
     index: FxHashMap<u64, u32>,
+    // Boxed: a brick is about 1 kB, so growing the vector moves pointers,
+    // not bricks.
+    #[allow(clippy::vec_box)]
     bricks: Vec<Box<Brick>>,
 }
 

@@ -267,8 +267,8 @@ impl Trail {
 
     fn push(&mut self, pose: Pose) {
         let stride = self.stride.max(1);
-        if self.seen % stride == 0 {
-            self.kept.push(pose.clone());
+        if self.seen.is_multiple_of(stride) {
+            self.kept.push(pose);
             if self.kept.len() >= Self::MAX {
                 // Keep every second pose and halve the rate from now on.
                 let mut i = 0;
@@ -288,7 +288,7 @@ impl Trail {
         let mut poses = self.kept.clone();
         if let Some(last) = &self.last {
             if poses.last() != Some(last) {
-                poses.push(last.clone());
+                poses.push(*last);
             }
         }
         poses
