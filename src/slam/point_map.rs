@@ -89,6 +89,11 @@ impl Default for PointParams {
 pub struct ScanSamples {
     /// The samples, in the order of the frame's points.
     pub samples: Vec<SurfaceSample>,
+    /// The frame's timestamp, s (`None` when unknown). It travels with the
+    /// samples so that the tracker sees the frame's time wherever the
+    /// samples are handed to it
+    /// ([`Tracker::track_with_samples`](super::Tracker::track_with_samples)).
+    pub stamp: Option<f64>,
 }
 
 impl ScanSamples {
@@ -111,7 +116,10 @@ impl ScanSamples {
                 samples.push(SurfaceSample { point: p, normal });
             }
         }
-        Self { samples }
+        Self {
+            samples,
+            stamp: Some(frame.stamp),
+        }
     }
 
     /// The samples not behind any of `reflective` (sensor frame) within
