@@ -35,7 +35,7 @@ pub mod tracker;
 
 pub use association::{associate, MapMatchParams};
 pub use clock::{FrameClock, FrameTiming};
-pub use log::{LandmarkObservation, TrackedFrame, TrackingLog};
+pub use log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
 pub use motion::{MotionModel, MotionModelName, MotionParams, MotionUpdate};
 pub use point_map::{LocalPointMap, PointParams, ScanSamples};
 pub use recovery::RecoveryParams;

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use super::association::{associate, MapMatchParams};
 use super::clock::{FrameClock, FrameTiming};
 use super::graph::{update_map, window_graph};
-use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
+use super::log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
 use super::motion::{MotionModel, MotionParams, MotionUpdate};
 use super::point_map::{LocalPointMap, PointParams, ScanSamples};
 use super::recovery::{recover_heading, RecoveryParams, RegistrationContext};
@@ -375,9 +375,12 @@ impl Tracker {
         };
 
         // 4. Points where planes are not enough.
+        let mut points_anchor = None;
         let pose = match samples.filter(|_| p.points.enabled) {
             Some(samples) => {
-                let refined = self.refine_with_points(&planes, samples, pose, &mut report);
+                let (refined, anchor) =
+                    self.refine_with_points(&planes, samples, pose, index, &mut report);
+                points_anchor = anchor;
                 if refined != pose {
                     // The frame-to-frame registration left the same
                     // directions free: the back-end's odometry is the
@@ -417,6 +420,7 @@ impl Tracker {
             pose,
             odometry,
             keyframe,
+            points_anchor,
         });
         report.pruned = self
             .map
@@ -477,14 +481,16 @@ impl Tracker {
     /// `report`'s degeneracy) against the local point map, then add the
     /// frame's samples to the map; samples behind a reflective plane of the
     /// frame or of the map are left out of both. Returns the refined pose
-    /// and counts the fixed directions in `report`.
+    /// and, when the points fixed some direction, what they measured it
+    /// against; counts the fixed directions in `report`.
     fn refine_with_points(
         &mut self,
         planes: &[FramePlane],
         samples: &ScanSamples,
         pose: Isometry3<f64>,
+        index: usize,
         report: &mut FrameReport,
-    ) -> Isometry3<f64> {
+    ) -> (Isometry3<f64>, Option<PointsAnchor>) {
         let pp = self.params.points;
         let to_sensor = pose.inverse();
         let reflective: Vec<BoundedPlane> = planes
@@ -501,6 +507,7 @@ impl Tracker {
             .collect();
         let clean = samples.without_reflections(&reflective, pp.reflective_margin);
         let mut pose = pose;
+        let mut anchor = None;
         if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
             let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
             let params = PointRefineParams {
@@ -514,11 +521,15 @@ impl Tracker {
                 refine_free_directions(&clean, |q, d| points.nearest(q, d), &pose, &free, &params);
             report.fixed_by_points = refined.fixed;
             pose = refined.pose;
+            anchor = refined.anchor.map(|frame| PointsAnchor {
+                frame,
+                directions: refined.fixed_directions,
+            });
         }
-        self.points.insert(&clean, &pose);
+        self.points.insert(&clean, &pose, index);
         self.points
             .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
-        pose
+        (pose, anchor)
     }
 
     /// Whether a frame tracked at `pose` is a keyframe: the first, every
