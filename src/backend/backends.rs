@@ -98,6 +98,15 @@ pub struct BackendParams {
     /// observation of a large plane outweighs hundreds of frames of
     /// odometry.
     pub max_observation_rms: f64,
+    /// Where tracking's point term fixed directions the planes left free,
+    /// a relative-pose factor along them ties the frame to the frame whose
+    /// points it was registered against, with this translation noise, m
+    /// (0: no such factors). Without them the back-end sees those
+    /// directions only through the frame-to-frame odometry, whose error
+    /// accumulates, and loses what the local point map knew.
+    pub point_anchor_translation_sigma: f64,
+    /// ... and this rotation noise, radians.
+    pub point_anchor_rotation_sigma: f64,
     /// `average`: weight of a landmark after its first observation (paper 3).
     pub average_second_weight: f64,
     /// `average`: cap on a landmark's weight (paper 10).
@@ -117,6 +126,8 @@ impl Default for BackendParams {
             odometry_translation_sigma: 0.05,
             odometry_rotation_sigma: 0.01,
             max_observation_rms: 0.0,
+            point_anchor_translation_sigma: 0.05,
+            point_anchor_rotation_sigma: 0.01,
             average_second_weight: 3.0,
             average_max_weight: 10.0,
         }
@@ -145,6 +156,22 @@ impl BackendParams {
             if !(v > 0.0) || !v.is_finite() {
                 return Err(Error::Config(format!(
                     "backend.{name} must be finite and positive, got {v}"
+                )));
+            }
+        }
+        for (name, v) in [
+            (
+                "point_anchor_translation_sigma",
+                self.point_anchor_translation_sigma,
+            ),
+            (
+                "point_anchor_rotation_sigma",
+                self.point_anchor_rotation_sigma,
+            ),
+        ] {
+            if !(v >= 0.0) || !v.is_finite() {
+                return Err(Error::Config(format!(
+                    "backend.{name} must be finite and ≥ 0 (0: off), got {v}"
                 )));
             }
         }

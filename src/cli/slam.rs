@@ -116,12 +116,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .collect();
     io::write_planes(&out.join("planes.json"), &records)?;
     let mut csv = String::from(
-        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms\n",
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms,interval,gap,jump,turn_deg,implausible_motion,recovered_yaw_deg\n",
     );
     for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
         writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3},{},{},{:.4},{:.2},{},{}",
             names[r.index],
             r.planes,
             r.frame_matches,
@@ -139,7 +139,18 @@ pub fn run(args: SlamArgs) -> Result<()> {
             r.fallback,
             r.fixed_by_points,
             r.landmarks,
-            t.as_secs_f64() * 1e3
+            t.as_secs_f64() * 1e3,
+            r.timing
+                .interval
+                .map(|dt| format!("{dt:.4}"))
+                .unwrap_or_default(),
+            r.timing.gap,
+            r.motion.jump,
+            r.motion.turn_deg,
+            r.motion.implausible,
+            r.recovered_yaw_deg
+                .map(|y| format!("{y:.1}"))
+                .unwrap_or_default(),
         )?;
     }
     io::write_atomic(&out.join("frames.csv"), |w| {
@@ -170,6 +181,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
     };
     let degenerate = slam.reports.iter().filter(|r| r.is_degenerate()).count();
     let fallback = slam.reports.iter().filter(|r| r.fallback).count();
+    let input = InputReport::new(&slam.reports, &names);
     let total: f64 = slam.frame_times.iter().map(|d| d.as_secs_f64()).sum();
     let fps = slam.reports.len() as f64 / total.max(1e-12);
 
@@ -196,6 +208,14 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "frames": slam.reports.len(),
         "degenerate_frames": degenerate,
         "fallback_frames": fallback,
+        "fallback": input.fallback,
+        "input_period": input.period,
+        "timestamps": input.stamped,
+        "gaps": input.gaps,
+        "implausible_motion_frames": input.implausible.len(),
+        "implausible_motion": input.implausible,
+        "recovered_frames": input.recovered.len(),
+        "recovered": input.recovered,
         "landmarks": slam.map.landmarks.len(),
         "specular": specular::provenance(),
         "frames_per_cpu_second": fps,
@@ -231,6 +251,9 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "poses.txt, planes.json, frames.csv, metrics.json, trajectory.png in {}",
         out.display()
     );
+    for line in input.lines() {
+        println!("{line}");
+    }
     if let Some(r) = &slam.backend {
         println!(
             "back-end {}: cost {:.6e} -> {:.6e} in {} iterations, {:.1} ms",
@@ -309,4 +332,153 @@ fn write_trajectory_plot(
     };
     plots::trajectory_png(&out.join("trajectory.png"), caption, &series)?;
     Ok(())
+}
+
+/// What the input's timing and the tracker's failures were, for the
+/// summary and `metrics.json`: a gap, a failed registration or an
+/// implausible motion is reported, never silent.
+struct InputReport {
+    /// Whether every frame had a timestamp.
+    stamped: bool,
+    /// The median interval between frames, s.
+    period: Option<f64>,
+    /// Frames after a gap: name, index, seconds since the previous frame.
+    gaps: Vec<serde_json::Value>,
+    /// Frames posed by the motion model alone (registration failed).
+    fallback: Vec<String>,
+    /// Frames whose frame-to-frame registration was found by the heading
+    /// search: name, index, degrees from the prediction.
+    recovered: Vec<serde_json::Value>,
+    /// Frames whose pose jumped from the extrapolation of the poses
+    /// before it: name, index, distance and angle.
+    implausible: Vec<serde_json::Value>,
+}
+
+impl InputReport {
+    fn new(reports: &[specular::slam::FrameReport], names: &[String]) -> Self {
+        let mut intervals: Vec<f64> = reports
+            .iter()
+            .filter_map(|r| r.timing.interval)
+            .filter(|dt| *dt > 0.0)
+            .collect();
+        intervals.sort_by(f64::total_cmp);
+        let name =
+            |r: &specular::slam::FrameReport| names.get(r.index).cloned().unwrap_or_default();
+        Self {
+            stamped: reports.iter().all(|r| r.stamp.is_some()),
+            period: intervals.get(intervals.len() / 2).copied(),
+            gaps: reports
+                .iter()
+                .filter(|r| r.timing.gap)
+                .map(|r| {
+                    json!({
+                        "frame": name(r),
+                        "index": r.index,
+                        "seconds": r.timing.interval,
+                        "usual_interval": r.timing.period,
+                    })
+                })
+                .collect(),
+            fallback: reports.iter().filter(|r| r.fallback).map(name).collect(),
+            recovered: reports
+                .iter()
+                .filter_map(|r| {
+                    r.recovered_yaw_deg.map(|yaw| {
+                        json!({
+                            "frame": name(r),
+                            "index": r.index,
+                            "yaw_deg": yaw,
+                        })
+                    })
+                })
+                .collect(),
+            implausible: reports
+                .iter()
+                .filter(|r| r.motion.implausible)
+                .map(|r| {
+                    json!({
+                        "frame": name(r),
+                        "index": r.index,
+                        "jump": r.motion.jump,
+                        "turn_deg": r.motion.turn_deg,
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    /// The summary's lines about the input and the tracker's failures.
+    fn lines(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        match self.period {
+            Some(p) if self.stamped => out.push(format!(
+                "input: {:.1} Hz (median interval {:.3} s), {} gap{}",
+                1.0 / p,
+                p,
+                self.gaps.len(),
+                if self.gaps.len() == 1 { "" } else { "s" }
+            )),
+            _ => out.push(
+                "input: no timestamps reached the tracker: every interval taken as [slam.motion] frame_period, gaps not detected".into(),
+            ),
+        }
+        let list = |v: &[String]| {
+            let shown: Vec<&str> = v.iter().take(5).map(String::as_str).collect();
+            let more = v.len().saturating_sub(shown.len());
+            if more > 0 {
+                format!("{} and {more} more", shown.join(", "))
+            } else {
+                shown.join(", ")
+            }
+        };
+        for g in &self.gaps {
+            out.push(format!(
+                "warning: gap of {:.2} s (usual {:.3} s) before frame {}",
+                g["seconds"].as_f64().unwrap_or(f64::NAN),
+                g["usual_interval"].as_f64().unwrap_or(f64::NAN),
+                g["frame"].as_str().unwrap_or("?")
+            ));
+        }
+        if !self.fallback.is_empty() {
+            out.push(format!(
+                "warning: registration failed on {} frame{}, posed by the motion model alone: {}",
+                self.fallback.len(),
+                if self.fallback.len() == 1 { "" } else { "s" },
+                list(&self.fallback)
+            ));
+        }
+        if !self.recovered.is_empty() {
+            let names: Vec<String> = self
+                .recovered
+                .iter()
+                .map(|v| {
+                    format!(
+                        "{} ({:+.0} deg)",
+                        v["frame"].as_str().unwrap_or("?"),
+                        v["yaw_deg"].as_f64().unwrap_or(f64::NAN)
+                    )
+                })
+                .collect();
+            out.push(format!(
+                "note: frame-to-frame registration failed at the predicted heading and was found by the heading search on {} frame{}: {}",
+                names.len(),
+                if names.len() == 1 { "" } else { "s" },
+                list(&names)
+            ));
+        }
+        if !self.implausible.is_empty() {
+            let names: Vec<String> = self
+                .implausible
+                .iter()
+                .map(|v| v["frame"].as_str().unwrap_or("?").to_string())
+                .collect();
+            out.push(format!(
+                "warning: implausible motion (a jump past [slam.motion] implausible_jump or implausible_turn_deg) on {} frame{}: {}",
+                names.len(),
+                if names.len() == 1 { "" } else { "s" },
+                list(&names)
+            ));
+        }
+        out
+    }
 }

@@ -14,6 +14,12 @@
 //! information reaches the threshold are fixed by the points; the step
 //! solves the Cauchy-weighted normal equations restricted to them. The
 //! other directions keep the pose they came with.
+//!
+//! Each map point carries the index of the frame that contributed it; the
+//! refinement reports the median of those over its last correspondences
+//! ([`PointRefinement::anchor`]): the fixed directions are then a
+//! measurement of the pose relative to that frame, which the back-end can
+//! use (a relative-pose factor along them).
 
 use nalgebra::{Isometry3, Matrix6, Point3, Vector3, Vector6};
 
@@ -64,6 +70,12 @@ pub struct PointRefinement {
     pub fixed: usize,
     /// Iterations run.
     pub iterations: usize,
+    /// The median frame index of the map points paired at the last
+    /// iteration (`None` when nothing was fixed): the frame the fixed
+    /// directions are measured against.
+    pub anchor: Option<usize>,
+    /// The fixed directions (orthonormal tangent vectors, sensor frame).
+    pub fixed_directions: Vec<Vector6<f64>>,
 }
 
 /// Settings of [`refine_free_directions`].
@@ -81,12 +93,13 @@ pub struct PointRefineParams {
 
 /// Refine `pose` by point-to-plane registration of `samples` (sensor frame)
 /// against a map (`nearest(p, max_distance)`: the map point nearest to
-/// world point `p`), moving it only within the span of `free` (orthonormal
-/// tangent directions, sensor frame: the directions the planes left free)
-/// and only along the ones the points observe.
+/// world point `p` and the index of the frame it came from), moving it
+/// only within the span of `free` (orthonormal tangent directions, sensor
+/// frame: the directions the planes left free) and only along the ones the
+/// points observe.
 pub fn refine_free_directions(
     samples: &[SurfaceSample],
-    nearest: impl Fn(&Point3<f64>, f64) -> Option<Point3<f64>>,
+    nearest: impl Fn(&Point3<f64>, f64) -> Option<(Point3<f64>, usize)>,
     pose: &Isometry3<f64>,
     free: &[Vector6<f64>],
     params: &PointRefineParams,
@@ -97,6 +110,8 @@ pub fn refine_free_directions(
         correspondences: 0,
         fixed: 0,
         iterations: 0,
+        anchor: None,
+        fixed_directions: Vec::new(),
     };
     if free.is_empty() {
         return out;
@@ -122,10 +137,13 @@ pub fn refine_free_directions(
         // system gives the step along those.
         let (mut info, mut h, mut g) = (Matrix6::zeros(), Matrix6::zeros(), Vector6::zeros());
         let mut pairs = 0;
+        let mut sources = Vec::new();
         for s in facing.iter().copied() {
-            let Some(m) = nearest(&(out.pose * s.point), params.max_correspondence) else {
+            let Some((m, source)) = nearest(&(out.pose * s.point), params.max_correspondence)
+            else {
                 continue;
             };
+            sources.push(source);
             let r = point_residual(&out.pose, s, &m);
             let j = point_jacobian(&out.pose, s, &m);
             let w = 1.0 / (1.0 + r * r / s2);
@@ -138,15 +156,20 @@ pub fn refine_free_directions(
         let observed = Degeneracy::of(&(projector * info * projector), params.min_information);
         out.fixed = 6 - observed.count();
         if out.fixed == 0 {
+            out.anchor = None;
+            out.fixed_directions.clear();
             break;
         }
-        let fixed: Matrix6<f64> = observed
+        out.fixed_directions = observed
             .eigenvalues
             .iter()
             .zip(&observed.eigenvectors)
             .filter(|(l, _)| **l > params.min_information)
-            .map(|(_, v)| v * v.transpose())
-            .sum();
+            .map(|(_, v)| *v)
+            .collect();
+        let mid = sources.len() / 2;
+        out.anchor = (!sources.is_empty()).then(|| *sources.select_nth_unstable(mid).1);
+        let fixed: Matrix6<f64> = out.fixed_directions.iter().map(|v| v * v.transpose()).sum();
         let step = Degeneracy::of(&(fixed * h * fixed), 1e-12).solve(&(fixed * g));
         if !step.iter().all(|v| v.is_finite()) {
             break;
@@ -243,7 +266,11 @@ mod tests {
                     })
                     .collect()
             };
-            map.insert(&as_samples(&Isometry3::identity()), &Isometry3::identity());
+            map.insert(
+                &as_samples(&Isometry3::identity()),
+                &Isometry3::identity(),
+                7,
+            );
             let start = Isometry3::translation(1.3, 0.0, 0.0);
             let free = [Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0)];
             let params = PointRefineParams {
@@ -256,6 +283,10 @@ mod tests {
             let r = refine_free_directions(&as_samples(&truth), nearest, &start, &free, &params);
             if with_end {
                 assert_eq!(r.fixed, 1);
+                // Measured against the frame that built the map.
+                assert_eq!(r.anchor, Some(7));
+                assert_eq!(r.fixed_directions.len(), 1);
+                assert!(r.fixed_directions[0][0].abs() > 0.999);
                 assert!(
                     (r.pose.translation.x - 1.0).abs() < 1e-6,
                     "{}",
@@ -264,6 +295,7 @@ mod tests {
             } else {
                 assert_eq!(r.fixed, 0);
                 assert_eq!(r.pose, start);
+                assert_eq!(r.anchor, None);
             }
             // Only the free direction moved.
             assert!(r.pose.translation.y.abs() < 1e-12 && r.pose.translation.z.abs() < 1e-12);

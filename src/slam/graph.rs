@@ -10,12 +10,19 @@
 //!   (independent of the map); where one failed, the tracked relative pose
 //!   with a ten times looser noise, so the chain stays connected and the
 //!   gauge stays the first pose's;
+//! - where tracking's point term fixed directions the planes left free, a
+//!   relative-pose factor along those directions only, from the frame the
+//!   matched map points came from to the frame
+//!   ([`BackendParams::point_anchor_translation_sigma`]): the local point map's
+//!   knowledge, which frame-to-frame odometry alone does not carry (in a
+//!   corridor the planes give no position along it; odometry drifts there
+//!   by its per-frame noise, the point map does not);
 //! - one plane factor per logged observation (plane-to-plane or the
 //!   point-to-plane scatter factor, per [`BackendParams::plane_factor`]),
 //!   with the configured robust kernel; an observation whose points lie
 //!   far from its landmark at the tracked pose
 //!   ([`BackendParams::max_observation_rms`]) is a wrong association and
-//!   is left out.
+//!   is left out (a landmark left without observations is no variable).
 //!
 //! The first pose is fixed (the graph's automatic gauge): it defines the
 //! world frame exactly as tracking did.
@@ -175,6 +182,13 @@ fn graph_of(
             a as u32, b as u32, measured, info,
         )));
     }
+    if params.point_anchor_translation_sigma > 0.0 && params.point_anchor_rotation_sigma > 0.0 {
+        for &k in frames {
+            if let Some(f) = anchor_factor(log, frames, k, params) {
+                graph.add(f);
+            }
+        }
+    }
 
     let plane_info = Matrix3::from_diagonal(&nalgebra::Vector3::new(
         1.0 / params.plane_normal_sigma,
@@ -213,7 +227,59 @@ fn graph_of(
             .factors
             .push(GraphFactor::new(factor).with_robust(robust));
     }
+    // A landmark whose every observation the gates left out is no variable
+    // (nothing would constrain it).
+    let used: BTreeSet<Key> = graph
+        .factors
+        .iter()
+        .flat_map(|f| {
+            crate::backend::factors::Factor::keys(&f.factor)
+                .iter()
+                .copied()
+        })
+        .collect();
+    graph
+        .values
+        .planes
+        .retain(|&id, _| used.contains(&Key::Plane(id)));
+    graph
+        .fixed
+        .retain(|k| !matches!(k, Key::Plane(_)) || used.contains(k));
     Ok(graph)
+}
+
+/// The point term's measurement of frame `k` as a factor: the tracked
+/// relative pose from its anchor frame (or the last graph frame before it,
+/// when the anchor is not in `frames`) with information only along the
+/// fixed directions, whitened by the point-anchor sigmas. `None` without
+/// an anchor or when no frame of `frames` precedes it.
+fn anchor_factor(
+    log: &TrackingLog,
+    frames: &[usize],
+    k: usize,
+    params: &BackendParams,
+) -> Option<AnyFactor> {
+    let anchor = log.frames[k].points_anchor.as_ref()?;
+    let a = frames[..frames.partition_point(|&f| f <= anchor.frame.min(k))]
+        .last()
+        .copied()
+        .filter(|&a| a < k)?;
+    let measured = log.frames[a].pose.inverse() * log.frames[k].pose;
+    let (t, r) = (
+        1.0 / params.point_anchor_translation_sigma,
+        1.0 / params.point_anchor_rotation_sigma,
+    );
+    let weights = Vector6::new(t, t, t, r, r, r);
+    let mut info = Matrix6::zeros();
+    for (row, v) in anchor.directions.iter().take(6).enumerate() {
+        // The residual's component along v, scaled by the noise of its
+        // translation and rotation parts.
+        let scale = (v.component_mul(&weights)).norm();
+        info.set_row(row, &(v.transpose() * scale));
+    }
+    Some(AnyFactor::Between(Between::new(
+        a as u32, k as u32, measured, info,
+    )))
 }
 
 /// The robust kernel of a point-to-plane factor. Its whitened norm is
@@ -301,6 +367,7 @@ mod tests {
                     pose,
                     odometry: (k > 0).then_some(step),
                     keyframe: keyframes.contains(&k),
+                    points_anchor: None,
                 }
             })
             .collect();
@@ -336,6 +403,59 @@ mod tests {
         };
         let ratio = second.sqrt_info[(0, 0)] / first.sqrt_info[(0, 0)];
         assert!((ratio - 3f64.sqrt()).abs() < 1e-12, "{ratio}");
+    }
+
+    /// A frame whose free direction (x) the points fixed against frame 2
+    /// is tied to frame 2 by a factor along x only, with the point-anchor
+    /// noise; with the sigmas at 0 there is no such factor, and an anchor
+    /// outside the graph's frames moves to the last frame before it.
+    #[test]
+    fn a_points_anchor_is_a_factor_along_the_fixed_directions_only() {
+        let mut l = log(6, &[0, 1, 2, 3, 4, 5]);
+        l.frames[5].points_anchor = Some(crate::slam::log::PointsAnchor {
+            frame: 2,
+            directions: vec![Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0)],
+        });
+        let params = BackendParams {
+            point_anchor_translation_sigma: 0.04,
+            ..BackendParams::default()
+        };
+        let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
+        assert_eq!(graph.factors.len(), 6);
+        let AnyFactor::Between(f) = &graph.factors[5].factor else {
+            panic!("a relative-pose factor");
+        };
+        assert_eq!(
+            crate::backend::factors::Factor::keys(f),
+            &[Key::Pose(2), Key::Pose(5)]
+        );
+        let truth = l.frames[2].pose.inverse() * l.frames[5].pose;
+        assert!((f.measured.translation.vector - truth.translation.vector).norm() < 1e-12);
+        assert!((f.sqrt_info[(0, 0)] - 25.0).abs() < 1e-12);
+        assert_eq!(f.sqrt_info.row(0).iter().filter(|v| **v != 0.0).count(), 1);
+        assert!(f.sqrt_info.rows(1, 5).iter().all(|v| *v == 0.0));
+        let off = BackendParams {
+            point_anchor_translation_sigma: 0.0,
+            ..params
+        };
+        assert_eq!(
+            tracking_graph(&l, &PlaneMap::new(), &off)
+                .unwrap()
+                .factors
+                .len(),
+            5
+        );
+        // Keyframes 0, 1, 4, 5: the anchor (frame 2) moves to frame 1.
+        for (k, f) in l.frames.iter_mut().enumerate() {
+            f.keyframe = [0, 1, 4, 5].contains(&k);
+        }
+        let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
+        let keys: Vec<_> = graph
+            .factors
+            .iter()
+            .map(|f| crate::backend::factors::Factor::keys(&f.factor).to_vec())
+            .collect();
+        assert!(keys.contains(&vec![Key::Pose(1), Key::Pose(5)]), "{keys:?}");
     }
 
     /// Frames between keyframes follow their keyframe's correction.

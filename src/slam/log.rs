@@ -5,7 +5,7 @@
 //! needs the individual measurements (GTSAM's factor graph is built from
 //! them), so the tracker logs them as it goes.
 
-use nalgebra::{Isometry3, Matrix3, Point3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector6};
 
 use crate::frontend::FramePlane;
 use crate::geometry::Plane;
@@ -22,6 +22,23 @@ pub struct TrackedFrame {
     /// Whether the frame is a keyframe: a pose of the batch back-end's
     /// graph, with its plane observations logged.
     pub keyframe: bool,
+    /// Where the points fixed directions the planes left free: the frame
+    /// the local point map's matched points came from (their median) and
+    /// the fixed directions (sensor-frame tangent vectors). Along them the
+    /// tracked pose is a measurement relative to that frame.
+    pub points_anchor: Option<PointsAnchor>,
+}
+
+/// The point term's measurement of a frame: along `directions` its pose is
+/// known relative to frame `frame` (the frame whose samples it was
+/// registered against).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointsAnchor {
+    /// Index of the anchor frame (earlier than the measured one).
+    pub frame: usize,
+    /// The directions fixed by the points (orthonormal tangent vectors
+    /// `(ρ, φ)`, sensor frame of the measured frame).
+    pub directions: Vec<Vector6<f64>>,
 }
 
 /// One plane of one frame, associated with a landmark.

@@ -3,9 +3,11 @@
 //!
 //! The paper's "Global Map Update", made robust where it falls short:
 //!
-//! 1. [`motion`]: predict the pose (constant velocity, bounded acceleration).
+//! 1. [`motion`]: predict the pose (constant velocity over the elapsed time,
+//!    bounded acceleration; [`clock`] gives the interval and reports gaps).
 //! 2. Frame-to-frame registration ([`crate::registration`]) from the
-//!    prediction gives the initial global pose.
+//!    prediction gives the initial global pose; where it fails, a search
+//!    over the heading ([`recovery`]) tries again.
 //! 3. [`association`]: frame planes (moved to the world) against the map's
 //!    landmarks by hull overlap (≥ 0.7 of the smaller hull) after normal and
 //!    offset gates.
@@ -23,14 +25,18 @@
 //! estimated poses) is [`crate::pipeline::slam`].
 
 pub mod association;
+pub mod clock;
 pub mod graph;
 pub mod log;
 pub mod motion;
 pub mod point_map;
+pub mod recovery;
 pub mod tracker;
 
 pub use association::{associate, MapMatchParams};
-pub use log::{LandmarkObservation, TrackedFrame, TrackingLog};
-pub use motion::{MotionModel, MotionModelName, MotionParams};
+pub use clock::{FrameClock, FrameTiming};
+pub use log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
+pub use motion::{MotionModel, MotionModelName, MotionParams, MotionUpdate};
 pub use point_map::{LocalPointMap, PointParams, ScanSamples};
+pub use recovery::RecoveryParams;
 pub use tracker::{FrameReport, SlamParams, Tracker};

@@ -4,13 +4,31 @@
 //! directions the planes do not constrain (a corridor's axis), and is the
 //! whole answer when registration fails.
 //!
+//! The velocity is a twist per second, and a prediction extrapolates it
+//! over the time that really elapsed since the last frame (the frames'
+//! timestamps): at 5 Hz the sensor moves twice as far between frames as at
+//! 10 Hz, and after a 0.5 s gap six times as far. A velocity per frame
+//! would put the sensor one frame's motion ahead whatever the interval, and
+//! the free directions of a corridor keep that error.
+//!
 //! Because unobservable directions are extrapolated with the velocity, one
 //! bad registration in an observable frame would otherwise set a wrong
 //! velocity that the following degenerate frames repeat indefinitely (in a
 //! corridor: a sensor driving backwards). The velocity estimate therefore
-//! changes by at most `max_velocity_change` metres and
-//! `max_rotation_change_deg` degrees per frame (a bounded acceleration:
-//! 0.02 m per frame is 2 m/s² at 10 Hz).
+//! changes by at most `max_acceleration` × the interval (m/s) and
+//! `max_angular_acceleration_deg` × the interval (deg/s) per frame: a
+//! bounded acceleration.
+//!
+//! A tracked pose is *implausible* ([`MotionUpdate::implausible`]) when it
+//! lies farther from the constant-velocity extrapolation of the two
+//! tracked poses before it than `implausible_jump` (m) or
+//! `implausible_turn_deg` plus what the bounded acceleration allows over
+//! the interval (`a dt² / 2`). The bounded velocity itself is no measure:
+//! it lags a real sharp turn by design, and registration noise over a
+//! 0.1 s interval looks like metres per second squared. The tracker
+//! reports implausible frames; they are the signature of a wrong
+//! registration (a jump) or of an input whose frames do not follow each
+//! other.
 
 use nalgebra::{Isometry3, Vector6};
 use serde::{Deserialize, Serialize};
@@ -21,7 +39,8 @@ use crate::geometry::se3;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MotionModelName {
-    /// The last relative motion repeats.
+    /// The last velocity (a twist per second) goes on over the elapsed
+    /// time.
     ConstantVelocity,
     /// The sensor is expected where it was (the paper's frame-to-frame
     /// matching assumes small motion).
@@ -34,30 +53,63 @@ pub enum MotionModelName {
 pub struct MotionParams {
     /// The model.
     pub model: MotionModelName,
-    /// Largest change of the velocity's translation per frame, m (∞ for
-    /// the plain constant-velocity model).
-    pub max_velocity_change: f64,
-    /// Largest change of the velocity's rotation per frame, degrees.
-    pub max_rotation_change_deg: f64,
+    /// Largest linear acceleration the velocity estimate follows, m/s²
+    /// (∞ for the plain constant-velocity model): per frame its
+    /// translation changes by at most this times the interval.
+    pub max_acceleration: f64,
+    /// Largest angular acceleration the velocity estimate follows, deg/s².
+    pub max_angular_acceleration_deg: f64,
+    /// Interval assumed between frames whose timestamps do not give one
+    /// (missing, equal or decreasing), s.
+    pub frame_period: f64,
+    /// A tracked pose farther than this (plus `max_acceleration dt² / 2`)
+    /// from the extrapolation of the poses before it is implausible, m.
+    pub implausible_jump: f64,
+    /// ... or turned farther than this (plus `max_angular_acceleration_deg
+    /// dt² / 2`), degrees.
+    pub implausible_turn_deg: f64,
 }
 
 impl Default for MotionParams {
     fn default() -> Self {
         Self {
             model: MotionModelName::ConstantVelocity,
-            max_velocity_change: 0.02,
-            max_rotation_change_deg: 1.0,
+            max_acceleration: 2.0,
+            max_angular_acceleration_deg: 100.0,
+            frame_period: 0.1,
+            implausible_jump: 0.15,
+            implausible_turn_deg: 10.0,
         }
     }
 }
 
-/// Predicts the next pose from the poses so far.
+/// What one [`MotionModel::update`] found: how far the tracked pose is
+/// from the constant-velocity extrapolation of the two tracked poses
+/// before it (0 before there are two).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MotionUpdate {
+    /// Distance of the position from the extrapolation, m.
+    pub jump: f64,
+    /// Angle of the orientation from the extrapolation, degrees.
+    pub turn_deg: f64,
+    /// Whether either is beyond its bound (`implausible_jump`,
+    /// `implausible_turn_deg`, each plus the bounded acceleration over the
+    /// interval): a wrong registration or frames that do not follow each
+    /// other.
+    pub implausible: bool,
+}
+
+/// Predicts the next pose from the poses so far and their times.
 #[derive(Debug, Clone)]
 pub struct MotionModel {
     params: MotionParams,
     last: Option<Isometry3<f64>>,
-    velocity: Isometry3<f64>,
+    /// Body-frame twist per second `(ρ, φ)`, of bounded change.
+    velocity: Vector6<f64>,
     has_velocity: bool,
+    /// The last measured twist per second, unbounded (for the
+    /// plausibility check).
+    measured: Vector6<f64>,
 }
 
 impl MotionModel {
@@ -66,27 +118,43 @@ impl MotionModel {
         Self {
             params,
             last: None,
-            velocity: Isometry3::identity(),
+            velocity: Vector6::zeros(),
             has_velocity: false,
+            measured: Vector6::zeros(),
         }
     }
 
-    /// The predicted next pose (`T_world_sensor`); `None` before the first
-    /// pose.
-    pub fn predict(&self) -> Option<Isometry3<f64>> {
-        let last = self.last?;
-        Some(match self.params.model {
-            MotionModelName::ConstantVelocity => last * self.velocity,
-            MotionModelName::Stationary => last,
-        })
+    /// The interval to use for `dt` (seconds): itself when positive and
+    /// finite, else the configured frame period.
+    pub fn interval(&self, dt: Option<f64>) -> f64 {
+        match dt {
+            Some(dt) if dt.is_finite() && dt > 0.0 => dt,
+            _ => self.params.frame_period,
+        }
     }
 
-    /// The relative motion the model expects from the last pose to the
-    /// next (identity before two poses or for the stationary model).
-    pub fn velocity(&self) -> Isometry3<f64> {
+    /// The predicted pose (`T_world_sensor`) `dt` seconds after the last
+    /// one; `None` before the first pose.
+    pub fn predict(&self, dt: f64) -> Option<Isometry3<f64>> {
+        let last = self.last?;
+        Some(last * self.motion_over(dt))
+    }
+
+    /// The relative motion the model expects over `dt` seconds from the
+    /// last pose (identity before two poses or for the stationary model).
+    pub fn motion_over(&self, dt: f64) -> Isometry3<f64> {
+        match self.params.model {
+            MotionModelName::ConstantVelocity => se3::exp(&(self.velocity * dt)),
+            MotionModelName::Stationary => Isometry3::identity(),
+        }
+    }
+
+    /// The velocity, a body-frame twist per second `(ρ, φ)` (zero for the
+    /// stationary model).
+    pub fn velocity(&self) -> Vector6<f64> {
         match self.params.model {
             MotionModelName::ConstantVelocity => self.velocity,
-            MotionModelName::Stationary => Isometry3::identity(),
+            MotionModelName::Stationary => Vector6::zeros(),
         }
     }
 
@@ -98,27 +166,42 @@ impl MotionModel {
         }
     }
 
-    /// Record the pose of the frame just tracked. The first measured
-    /// relative motion is taken as is; later ones move the velocity by at
-    /// most the configured change.
-    pub fn update(&mut self, pose: Isometry3<f64>) {
+    /// Record the pose of the frame just tracked, `dt` seconds after the
+    /// last one (one `frame_period` when not positive). The first measured
+    /// velocity is taken as is; later ones move the velocity by at most
+    /// the bounded acceleration over `dt`. The returned [`MotionUpdate`]
+    /// says how far the pose is from the extrapolation of the poses before
+    /// it.
+    pub fn update(&mut self, pose: Isometry3<f64>, dt: f64) -> MotionUpdate {
+        let mut out = MotionUpdate::default();
+        let p = &self.params;
         if let Some(last) = self.last {
-            let measured = last.inverse() * pose;
+            let dt = self.interval(Some(dt));
+            let measured = se3::local(&last, &pose) / dt;
             if self.has_velocity {
-                let mut delta = se3::local(&self.velocity, &measured);
-                clamp_norm(&mut delta, 0, self.params.max_velocity_change);
+                let expected = last * se3::exp(&(self.measured * dt));
+                out.jump = (pose.translation.vector - expected.translation.vector).norm();
+                out.turn_deg = pose.rotation.angle_to(&expected.rotation).to_degrees();
+                let allowance = 0.5 * dt * dt;
+                out.implausible = out.jump > p.implausible_jump + p.max_acceleration * allowance
+                    || out.turn_deg
+                        > p.implausible_turn_deg + p.max_angular_acceleration_deg * allowance;
+                let mut delta = measured - self.velocity;
+                clamp_norm(&mut delta, 0, p.max_acceleration * dt);
                 clamp_norm(
                     &mut delta,
                     3,
-                    self.params.max_rotation_change_deg.to_radians(),
+                    p.max_angular_acceleration_deg.to_radians() * dt,
                 );
-                self.velocity = se3::retract(&self.velocity, &delta);
+                self.velocity += delta;
             } else {
                 self.velocity = measured;
                 self.has_velocity = true;
             }
+            self.measured = measured;
         }
         self.last = Some(pose);
+        out
     }
 }
 
@@ -136,45 +219,97 @@ mod tests {
     use super::*;
     use nalgebra::Vector3;
 
+    fn unbounded() -> MotionParams {
+        MotionParams {
+            max_acceleration: f64::INFINITY,
+            max_angular_acceleration_deg: f64::INFINITY,
+            ..Default::default()
+        }
+    }
+
+    fn close(a: &Isometry3<f64>, b: &Isometry3<f64>) -> bool {
+        (a.translation.vector - b.translation.vector).norm() < 1e-9
+            && a.rotation.angle_to(&b.rotation) < 1e-9
+    }
+
     #[test]
     fn constant_velocity_repeats_the_last_motion_in_the_body_frame() {
-        let mut m = MotionModel::new(MotionParams {
-            max_velocity_change: f64::INFINITY,
-            max_rotation_change_deg: f64::INFINITY,
-            ..Default::default()
-        });
-        assert!(m.predict().is_none());
+        let mut m = MotionModel::new(unbounded());
+        assert!(m.predict(0.1).is_none());
         let step = Isometry3::new(Vector3::new(0.1, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.1));
         let p0 = Isometry3::new(Vector3::new(1.0, 2.0, 0.0), Vector3::new(0.0, 0.0, 0.5));
-        m.update(p0);
-        assert_eq!(m.predict(), Some(p0));
-        m.update(p0 * step);
-        let expect = p0 * step * step;
-        let got = m.predict().unwrap();
-        assert!((got.translation.vector - expect.translation.vector).norm() < 1e-12);
-        assert!(got.rotation.angle_to(&expect.rotation) < 1e-12);
+        m.update(p0, 0.1);
+        assert_eq!(m.predict(0.1), Some(p0));
+        m.update(p0 * step, 0.1);
+        assert!(close(&m.predict(0.1).unwrap(), &(p0 * step * step)));
         let mut s = MotionModel::new(MotionParams {
             model: MotionModelName::Stationary,
             ..Default::default()
         });
-        s.update(p0);
-        s.update(p0 * step);
-        assert_eq!(s.predict(), Some(p0 * step));
+        s.update(p0, 0.1);
+        s.update(p0 * step, 0.1);
+        assert_eq!(s.predict(0.1), Some(p0 * step));
     }
 
     #[test]
-    fn one_bad_pose_moves_the_velocity_by_a_bounded_step() {
+    fn a_prediction_extrapolates_over_the_elapsed_time() {
+        // 0.1 m and 0.1 rad per 0.1 s; after a 0.6 s interval the model
+        // expects six steps, after 0.2 s two.
+        let mut m = MotionModel::new(MotionParams::default());
+        let step = Isometry3::new(Vector3::new(0.1, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.1));
+        let p0 = Isometry3::identity();
+        m.update(p0, 0.1);
+        m.update(step, 0.1);
+        let six = (0..6).fold(step, |p, _| p * step);
+        assert!(close(&m.predict(0.6).unwrap(), &six));
+        assert!(close(&m.predict(0.2).unwrap(), &(step * step * step)));
+        // The same motion at 5 Hz: 0.2 m per 0.2 s is the same velocity.
+        let mut slow = MotionModel::new(MotionParams::default());
+        slow.update(p0, 0.2);
+        slow.update(step * step, 0.2);
+        assert!((slow.velocity() - m.velocity()).norm() < 1e-9);
+        // A frame without a usable interval counts one frame period.
+        assert_eq!(m.interval(None), 0.1);
+        assert_eq!(m.interval(Some(0.0)), 0.1);
+        assert_eq!(m.interval(Some(-0.3)), 0.1);
+        assert_eq!(m.interval(Some(0.25)), 0.25);
+    }
+
+    #[test]
+    fn one_bad_pose_moves_the_velocity_by_a_bounded_step_and_is_implausible() {
         let mut m = MotionModel::new(MotionParams::default());
         let step = Isometry3::translation(0.08, 0.0, 0.0);
         let mut pose = Isometry3::identity();
         for _ in 0..3 {
-            m.update(pose);
+            assert!(!m.update(pose, 0.1).implausible);
             pose *= step;
         }
-        // A registration puts the sensor 0.2 m back instead of 0.08 ahead.
+        // A registration puts the sensor 0.2 m back instead of 0.08 ahead:
+        // 0.28 m from the extrapolation, and the velocity (0.8 m/s) follows
+        // 2 m/s² of the 28 m/s² it would take.
         let last = pose * step.inverse();
-        m.update(last * Isometry3::translation(-0.2, 0.0, 0.0));
-        let v = m.velocity().translation.vector.x;
-        assert!((v - 0.06).abs() < 1e-9, "{v}");
+        let u = m.update(last * Isometry3::translation(-0.2, 0.0, 0.0), 0.1);
+        assert!(u.implausible);
+        assert!((u.jump - 0.28).abs() < 1e-9, "{u:?}");
+        let v = m.velocity()[0];
+        assert!((v - 0.6).abs() < 1e-9, "{v}");
+        // A 12 degree turn within 0.1 s after driving straight is
+        // implausible, 5 degrees is not.
+        let mut t = MotionModel::new(MotionParams::default());
+        t.update(Isometry3::identity(), 0.1);
+        t.update(step, 0.1);
+        let turned = |deg: f64| step * step * Isometry3::rotation(Vector3::z() * deg.to_radians());
+        assert!(!t.clone().update(turned(5.0), 0.1).implausible);
+        let u = t.update(turned(12.0), 0.1);
+        assert!(u.implausible && (u.turn_deg - 12.0).abs() < 1e-9, "{u:?}");
+        // The bounds grow with the interval: over 0.6 s the velocity may
+        // change by 1.2 m/s, and 0.3 m off the extrapolation is plausible
+        // (0.15 + 2 × 0.6² / 2 = 0.51 m).
+        let mut g = MotionModel::new(MotionParams::default());
+        g.update(Isometry3::identity(), 0.1);
+        g.update(Isometry3::translation(0.1, 0.0, 0.0), 0.1);
+        let u = g.update(Isometry3::translation(0.1 + 0.6 * 1.5, 0.0, 0.0), 0.6);
+        assert!(!u.implausible && (u.jump - 0.3).abs() < 1e-9, "{u:?}");
+        assert!((g.velocity()[0] - 1.5).abs() < 1e-9);
     }
 }

@@ -89,6 +89,11 @@ impl Default for PointParams {
 pub struct ScanSamples {
     /// The samples, in the order of the frame's points.
     pub samples: Vec<SurfaceSample>,
+    /// The frame's timestamp, s (`None` when unknown). It travels with the
+    /// samples so that the tracker sees the frame's time wherever the
+    /// samples are handed to it
+    /// ([`Tracker::track_with_samples`](super::Tracker::track_with_samples)).
+    pub stamp: Option<f64>,
 }
 
 impl ScanSamples {
@@ -111,7 +116,10 @@ impl ScanSamples {
                 samples.push(SurfaceSample { point: p, normal });
             }
         }
-        Self { samples }
+        Self {
+            samples,
+            stamp: Some(frame.stamp),
+        }
     }
 
     /// The samples not behind any of `reflective` (sensor frame) within
@@ -160,7 +168,8 @@ fn voxel_key(p: &Point3<f64>, voxel: f64) -> [i32; 3] {
 pub struct LocalPointMap {
     voxel: f64,
     max_per_voxel: usize,
-    voxels: VoxelMap<Vec<Point3<f64>>>,
+    /// Points (world frame) with the index of the frame that added them.
+    voxels: VoxelMap<Vec<(Point3<f64>, usize)>>,
 }
 
 impl LocalPointMap {
@@ -184,13 +193,14 @@ impl LocalPointMap {
         self.voxels.values().map(Vec::len).sum()
     }
 
-    /// Add `samples` (sensor frame) seen from `pose` (`T_world_sensor`).
-    pub fn insert(&mut self, samples: &[SurfaceSample], pose: &Isometry3<f64>) {
+    /// Add `samples` (sensor frame) of frame `frame` seen from `pose`
+    /// (`T_world_sensor`).
+    pub fn insert(&mut self, samples: &[SurfaceSample], pose: &Isometry3<f64>, frame: usize) {
         for s in samples {
             let p = pose * s.point;
             let cell = self.voxels.entry(voxel_key(&p, self.voxel)).or_default();
             if cell.len() < self.max_per_voxel {
-                cell.push(p);
+                cell.push((p, frame));
             }
         }
     }
@@ -201,13 +211,14 @@ impl LocalPointMap {
         let r2 = radius * radius;
         self.voxels.retain(|_, pts| {
             pts.first()
-                .is_some_and(|p| (p - centre).norm_squared() <= r2)
+                .is_some_and(|(p, _)| (p - centre).norm_squared() <= r2)
         });
     }
 
     /// The map point nearest to `p` (world frame) within `max_distance`
-    /// (at most one voxel edge: the neighbouring voxels are searched).
-    pub fn nearest(&self, p: &Point3<f64>, max_distance: f64) -> Option<Point3<f64>> {
+    /// (at most one voxel edge: the neighbouring voxels are searched), with
+    /// the index of the frame that added it.
+    pub fn nearest(&self, p: &Point3<f64>, max_distance: f64) -> Option<(Point3<f64>, usize)> {
         let [x, y, z] = voxel_key(p, self.voxel);
         let mut best = None;
         let mut best_d2 = max_distance * max_distance;
@@ -217,11 +228,11 @@ impl LocalPointMap {
                     let Some(pts) = self.voxels.get(&[x + dx, y + dy, z + dz]) else {
                         continue;
                     };
-                    for q in pts {
+                    for (q, frame) in pts {
                         let d2 = (q - p).norm_squared();
                         if d2 < best_d2 {
                             best_d2 = d2;
-                            best = Some(*q);
+                            best = Some((*q, *frame));
                         }
                     }
                 }
@@ -249,11 +260,12 @@ mod tests {
                 normal: Vector3::x(),
             },
         ];
-        map.insert(&samples, &Isometry3::translation(1.0, 0.0, 0.0));
+        map.insert(&samples, &Isometry3::translation(1.0, 0.0, 0.0), 4);
         assert_eq!(map.len(), 2);
         // 1.49 and 2.2 in the world: 1.55 is nearest to 1.49 (next voxel).
-        let q = map.nearest(&Point3::new(1.55, 0.0, 0.0), 0.3).unwrap();
+        let (q, frame) = map.nearest(&Point3::new(1.55, 0.0, 0.0), 0.3).unwrap();
         assert!((q.x - 1.49).abs() < 1e-12);
+        assert_eq!(frame, 4);
         assert!(map.nearest(&Point3::new(1.85, 0.0, 0.0), 0.3).is_none());
     }
 
@@ -266,8 +278,8 @@ mod tests {
                 normal: Vector3::x(),
             })
             .collect();
-        map.insert(&samples, &Isometry3::identity());
-        map.insert(&samples, &Isometry3::translation(50.0, 0.0, 0.0));
+        map.insert(&samples, &Isometry3::identity(), 0);
+        map.insert(&samples, &Isometry3::translation(50.0, 0.0, 0.0), 1);
         assert_eq!(map.len(), 6);
         map.forget_beyond(&Point3::origin(), 10.0);
         assert_eq!(map.len(), 3);

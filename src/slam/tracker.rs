@@ -5,10 +5,12 @@ use nalgebra::{Isometry3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
+use super::clock::{FrameClock, FrameTiming};
 use super::graph::{update_map, window_graph};
-use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
-use super::motion::{MotionModel, MotionParams};
+use super::log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
+use super::motion::{MotionModel, MotionParams, MotionUpdate};
 use super::point_map::{LocalPointMap, PointParams, ScanSamples};
+use super::recovery::{recover_heading, RecoveryParams, RegistrationContext};
 use crate::backend::{Backend, BackendParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
@@ -41,6 +43,9 @@ pub struct SlamParams {
     /// Points where planes are not enough: the directions the planes leave
     /// free are refined against a local map of points.
     pub points: PointParams,
+    /// The heading search for frames whose frame-to-frame registration
+    /// failed.
+    pub recovery: RecoveryParams,
     /// Landmarks are pruned once this many frames old ...
     pub prune_after: usize,
     /// ... when they have fewer observations than this.
@@ -61,6 +66,10 @@ pub struct SlamParams {
     pub keyframe_move: f64,
     /// ... or turned more than this, degrees.
     pub keyframe_turn_deg: f64,
+    /// A frame that comes more than this many times the input's usual
+    /// interval after the previous one follows a gap (frames missing),
+    /// reported per frame (0: never).
+    pub gap_ratio: f64,
 }
 
 impl FrameReport {
@@ -86,6 +95,7 @@ impl Default for SlamParams {
             rejector: RejectorParams::default(),
             gauss_newton: GaussNewtonParams::default(),
             points: PointParams::default(),
+            recovery: RecoveryParams::default(),
             prune_after: 30,
             prune_min_observations: 3,
             rpe_segment: 1.0,
@@ -93,6 +103,7 @@ impl Default for SlamParams {
             window_every: 5,
             keyframe_move: 0.0,
             keyframe_turn_deg: 0.0,
+            gap_ratio: 1.5,
         }
     }
 }
@@ -121,12 +132,25 @@ pub struct FrameReport {
     /// Of the directions the planes left free, how many the points fixed
     /// (the others kept the motion model's prediction).
     pub fixed_by_points: usize,
+    /// The frame-to-frame registration failed at the predicted heading and
+    /// was found this many degrees away from it
+    /// ([`RecoveryParams`]).
+    pub recovered_yaw_deg: Option<f64>,
     /// Landmarks in the map after the update.
     pub landmarks: usize,
     /// Landmarks pruned in this step.
     pub pruned: usize,
     /// The estimated pose `T_world_sensor`.
     pub pose: Isometry3<f64>,
+    /// The frame's timestamp, s (`None` when the tracker was not given
+    /// one).
+    pub stamp: Option<f64>,
+    /// The interval since the previous frame and whether frames are
+    /// missing before this one.
+    pub timing: FrameTiming,
+    /// How far the tracked pose departs from the motion model's
+    /// prediction, as accelerations; `implausible` when beyond its bounds.
+    pub motion: MotionUpdate,
 }
 
 /// Scan-to-map tracking over a sequence of frames' planes.
@@ -150,6 +174,8 @@ pub struct Tracker {
     window: Option<(Box<dyn Backend>, BackendParams)>,
     /// Pose of the last keyframe.
     last_keyframe: Option<Isometry3<f64>>,
+    /// The frames' timing.
+    clock: FrameClock,
     /// Earlier frames' surface samples around the sensor.
     points: LocalPointMap,
 }
@@ -175,6 +201,7 @@ impl Tracker {
             log: TrackingLog::default(),
             window: None,
             last_keyframe: None,
+            clock: FrameClock::new(params.gap_ratio),
             points: LocalPointMap::new(params.points.map_voxel, params.points.max_points_per_voxel),
         }
     }
@@ -215,9 +242,26 @@ impl Tracker {
 
     /// Track one frame given its planes and its surface samples (sensor
     /// frame, [`ScanSamples`]): the directions the planes leave free are
-    /// refined against the local point map ([`PointParams`]).
+    /// refined against the local point map ([`PointParams`]). The frame's
+    /// time is the samples' stamp ([`ScanSamples::stamp`]); see
+    /// [`track_at`](Self::track_at).
     pub fn track_with_samples(
         &mut self,
+        planes: Vec<FramePlane>,
+        samples: Option<&ScanSamples>,
+        seed: u64,
+    ) -> FrameReport {
+        self.track_at(samples.and_then(|s| s.stamp), planes, samples, seed)
+    }
+
+    /// Track one frame stamped `stamp` (seconds; `None` when unknown) given
+    /// its planes and optionally its surface samples. The motion model
+    /// extrapolates over the time since the previous frame (one
+    /// `frame_period` when unknown), and a frame after a gap is reported
+    /// ([`FrameReport::timing`]).
+    pub fn track_at(
+        &mut self,
+        stamp: Option<f64>,
         planes: Vec<FramePlane>,
         samples: Option<&ScanSamples>,
         seed: u64,
@@ -225,6 +269,8 @@ impl Tracker {
         let p = self.params;
         let index = self.frames;
         self.frames += 1;
+        let timing = self.clock.tick(stamp);
+        let dt = self.motion.interval(timing.interval);
         let usable: Vec<FramePlane> = planes
             .iter()
             .filter(|fp| p.use_reflective || fp.kind != PlaneKind::Reflective)
@@ -242,15 +288,19 @@ impl Tracker {
             degeneracy: None,
             fallback: false,
             fixed_by_points: 0,
+            recovered_yaw_deg: None,
             landmarks: 0,
             pruned: 0,
             pose: self.origin,
+            stamp,
+            timing,
+            motion: MotionUpdate::default(),
         };
 
         // 1. Predict (the first frame defines the world frame).
         let mut matched: Vec<Option<usize>> = vec![None; usable.len()];
         let mut odometry = None;
-        let pose = match (self.motion.predict(), &self.previous) {
+        let pose = match (self.motion.predict(dt), &self.previous) {
             (Some(predicted), Some((prev_planes, prev_pose))) => {
                 // 2. Frame-to-frame registration: the initial global pose.
                 let mut initial = predicted;
@@ -258,7 +308,7 @@ impl Tracker {
                     let rel_prior = prev_pose.inverse() * predicted;
                     let pairs = match_planes(&usable, prev_planes, &rel_prior, &p.frame_matching);
                     report.frame_matches = pairs.len();
-                    if let Some(reg) = register(
+                    let mut f2f = register(
                         &pairs,
                         &rel_prior,
                         self.rejector.as_ref(),
@@ -266,7 +316,27 @@ impl Tracker {
                         inlier_cos,
                         inlier_offset,
                         seed,
-                    ) {
+                    );
+                    let weak = f2f
+                        .as_ref()
+                        .is_none_or(|r| r.inliers.len() < p.recovery.min_inliers);
+                    if p.recovery.enabled && weak {
+                        let ctx = RegistrationContext {
+                            rejector: self.rejector.as_ref(),
+                            gauss_newton: &p.gauss_newton,
+                            criteria: &p.frame_matching,
+                            inlier_cos,
+                            inlier_offset,
+                            seed,
+                        };
+                        if let Some(r) =
+                            recover_heading(&usable, prev_planes, &rel_prior, &p.recovery, &ctx)
+                        {
+                            report.recovered_yaw_deg = Some(r.yaw_deg);
+                            f2f = Some(r.registration);
+                        }
+                    }
+                    if let Some(reg) = f2f {
                         report.frame_inliers = reg.inliers.len();
                         odometry = Some(reg.pose);
                         initial = prev_pose * reg.pose;
@@ -305,9 +375,12 @@ impl Tracker {
         };
 
         // 4. Points where planes are not enough.
+        let mut points_anchor = None;
         let pose = match samples.filter(|_| p.points.enabled) {
             Some(samples) => {
-                let refined = self.refine_with_points(&planes, samples, pose, &mut report);
+                let (refined, anchor) =
+                    self.refine_with_points(&planes, samples, pose, index, &mut report);
+                points_anchor = anchor;
                 if refined != pose {
                     // The frame-to-frame registration left the same
                     // directions free: the back-end's odometry is the
@@ -347,13 +420,14 @@ impl Tracker {
             pose,
             odometry,
             keyframe,
+            points_anchor,
         });
         report.pruned = self
             .map
             .prune(index, p.prune_after, p.prune_min_observations);
         report.landmarks = self.map.landmarks.len();
 
-        self.motion.update(pose);
+        report.motion = self.motion.update(pose, dt);
         self.previous = Some((usable, pose));
         report.pose = pose;
         if p.window >= 2 && p.window_every >= 1 && (index + 1) % p.window_every == 0 {
@@ -407,14 +481,16 @@ impl Tracker {
     /// `report`'s degeneracy) against the local point map, then add the
     /// frame's samples to the map; samples behind a reflective plane of the
     /// frame or of the map are left out of both. Returns the refined pose
-    /// and counts the fixed directions in `report`.
+    /// and, when the points fixed some direction, what they measured it
+    /// against; counts the fixed directions in `report`.
     fn refine_with_points(
         &mut self,
         planes: &[FramePlane],
         samples: &ScanSamples,
         pose: Isometry3<f64>,
+        index: usize,
         report: &mut FrameReport,
-    ) -> Isometry3<f64> {
+    ) -> (Isometry3<f64>, Option<PointsAnchor>) {
         let pp = self.params.points;
         let to_sensor = pose.inverse();
         let reflective: Vec<BoundedPlane> = planes
@@ -431,6 +507,7 @@ impl Tracker {
             .collect();
         let clean = samples.without_reflections(&reflective, pp.reflective_margin);
         let mut pose = pose;
+        let mut anchor = None;
         if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
             let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
             let params = PointRefineParams {
@@ -444,11 +521,15 @@ impl Tracker {
                 refine_free_directions(&clean, |q, d| points.nearest(q, d), &pose, &free, &params);
             report.fixed_by_points = refined.fixed;
             pose = refined.pose;
+            anchor = refined.anchor.map(|frame| PointsAnchor {
+                frame,
+                directions: refined.fixed_directions,
+            });
         }
-        self.points.insert(&clean, &pose);
+        self.points.insert(&clean, &pose, index);
         self.points
             .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
-        pose
+        (pose, anchor)
     }
 
     /// Whether a frame tracked at `pose` is a keyframe: the first, every
