@@ -430,7 +430,7 @@ impl Tracker {
         report.motion = self.motion.update(pose, dt);
         self.previous = Some((usable, pose));
         report.pose = pose;
-        if p.window >= 2 && p.window_every >= 1 && (index + 1) % p.window_every == 0 {
+        if p.window >= 2 && p.window_every >= 1 && (index + 1).is_multiple_of(p.window_every) {
             if let Some(corrected) = self.optimize_window(index) {
                 report.pose = corrected;
             }
