@@ -158,23 +158,29 @@ fn a_truncated_frame_fails_cleanly_and_writes_nothing() {
     );
 }
 
-#[test]
-fn a_frame_without_a_pose_is_named() {
+/// `detect` on the sample with a pose file holding `poses`: the failed
+/// run's error message.
+fn detect_sample_failing_with_poses(poses: &str) -> String {
     let sample = common::sample_dir();
-    let poses = tempfile::NamedTempFile::new().unwrap();
-    std::fs::write(poses.path(), "1689496219.652560 0 0 0 0 0 0 1\n").unwrap();
+    let file = tempfile::NamedTempFile::new().unwrap();
+    std::fs::write(file.path(), poses).unwrap();
     let out = tempfile::tempdir().unwrap();
     let o = specular(&[
         "detect",
         "--frames",
         s(&sample.join("frames")),
         "--poses",
-        s(poses.path()),
+        s(file.path()),
         "--out",
         s(out.path()),
     ]);
     assert!(!o.status.success());
-    let err = stderr(&o);
+    stderr(&o)
+}
+
+#[test]
+fn a_frame_without_a_pose_is_named() {
+    let err = detect_sample_failing_with_poses("1689496219.652560 0 0 0 0 0 0 1\n");
     assert!(
         err.contains("no pose within") && err.contains("1689496220.052616"),
         "{err}"
@@ -185,25 +191,9 @@ fn a_frame_without_a_pose_is_named() {
 /// in seconds: the error says which side looks like nanoseconds.
 #[test]
 fn nanosecond_timestamps_are_diagnosed() {
-    let sample = common::sample_dir();
-    let poses = tempfile::NamedTempFile::new().unwrap();
-    std::fs::write(
-        poses.path(),
+    let err = detect_sample_failing_with_poses(
         "1689496219652560000 0 0 0 0 0 0 1\n1689496220652560000 0 0 0 0 0 0 1\n",
-    )
-    .unwrap();
-    let out = tempfile::tempdir().unwrap();
-    let o = specular(&[
-        "detect",
-        "--frames",
-        s(&sample.join("frames")),
-        "--poses",
-        s(poses.path()),
-        "--out",
-        s(out.path()),
-    ]);
-    assert!(!o.status.success());
-    let err = stderr(&o);
+    );
     assert!(
         err.contains("pose timestamps look like nanoseconds"),
         "{err}"
