@@ -560,25 +560,30 @@ mod tests {
         }
     }
 
+    /// The landmark of [`pane_frame`]'s pane: x = 5, facing the sensor,
+    /// y from -1.8 to 0.4 and z from -1.2 to 1.2.
+    fn pane_landmark() -> BoundedPlane {
+        let plane =
+            crate::geometry::Plane::new(nalgebra::Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
+        BoundedPlane::from_points(
+            plane,
+            [(-1.8, -1.2), (0.4, -1.2), (0.4, 1.2), (-1.8, 1.2)]
+                .iter()
+                .map(|&(y, z)| Point3::new(5.0, y, z)),
+        )
+    }
+
     /// Where the sensor walked through the pane, its evidence is an
     /// opening: below and beside the crossing, not above it or a metre
     /// away; and a landmark walked through is passed through.
     #[test]
     fn where_the_sensor_crossed_the_plane_it_is_open() {
         use crate::geometry::grid::Surface;
-        use crate::geometry::Plane;
         use crate::sensor::SensorModel;
-        use nalgebra::Vector3;
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         let frame = pane_frame(&sensor);
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
-        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
-        let mut pane = BoundedPlane::from_points(
-            plane,
-            [(-1.8, -1.2), (0.4, -1.2), (0.4, 1.2), (-1.8, 1.2)]
-                .iter()
-                .map(|&(y, z)| Point3::new(5.0, y, z)),
-        );
+        let mut pane = pane_landmark();
         let f = EvidenceFrame {
             frame: &frame,
             scan: &scan,
@@ -615,9 +620,7 @@ mod tests {
     #[test]
     fn bare_passes_near_normal_incidence_are_an_opening() {
         use crate::geometry::grid::Surface;
-        use crate::geometry::Plane;
         use crate::sensor::SensorModel;
-        use nalgebra::Vector3;
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         let mut frame = pane_frame(&sensor);
         frame.points.retain(|p| {
@@ -631,13 +634,7 @@ mod tests {
             }
         }
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
-        let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
-        let pane = BoundedPlane::from_points(
-            plane,
-            [(-1.8, -1.2), (0.4, -1.2), (0.4, 1.2), (-1.8, 1.2)]
-                .iter()
-                .map(|&(y, z)| Point3::new(5.0, y, z)),
-        );
+        let pane = pane_landmark();
         let f = EvidenceFrame {
             frame: &frame,
             scan: &scan,
