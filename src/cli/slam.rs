@@ -411,16 +411,17 @@ impl InputReport {
     fn lines(&self) -> Vec<String> {
         let mut out = Vec::new();
         match self.period {
-            Some(p) if self.stamped => out.push(format!(
+            _ if !self.stamped => out.push(
+                "input: no timestamps reached the tracker: every interval taken as [slam.motion] frame_period, gaps not detected".into(),
+            ),
+            Some(p) => out.push(format!(
                 "input: {:.1} Hz (median interval {:.3} s), {} gap{}",
                 1.0 / p,
                 p,
                 self.gaps.len(),
                 if self.gaps.len() == 1 { "" } else { "s" }
             )),
-            _ => out.push(
-                "input: no timestamps reached the tracker: every interval taken as [slam.motion] frame_period, gaps not detected".into(),
-            ),
+            None => out.push("input: no interval between frames (one frame)".into()),
         }
         let list = |v: &[String]| {
             let shown: Vec<&str> = v.iter().take(5).map(String::as_str).collect();

@@ -131,13 +131,14 @@ pub fn refine_free_directions(
         })
         .collect();
     let s2 = params.kernel_scale * params.kernel_scale;
+    let mut sources = Vec::with_capacity(facing.len());
     for _ in 0..params.max_iterations {
         // Unweighted information decides which free directions the samples
         // observe (geometry: how many face along them); the kernel-weighted
         // system gives the step along those.
         let (mut info, mut h, mut g) = (Matrix6::zeros(), Matrix6::zeros(), Vector6::zeros());
         let mut pairs = 0;
-        let mut sources = Vec::new();
+        sources.clear();
         for s in facing.iter().copied() {
             let Some((m, source)) = nearest(&(out.pose * s.point), params.max_correspondence)
             else {
