@@ -120,7 +120,7 @@ fn is_run_output(name: &str) -> bool {
     RUN_OUTPUTS
         .iter()
         .any(|k| name == *k || (k.starts_with('.') && name.ends_with(k)))
-        || (name.starts_with('.') && name.contains(".tmp"))
+        || is_temporary(name)
 }
 
 /// An output directory claimed by a run.

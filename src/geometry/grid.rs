@@ -159,18 +159,20 @@ impl EvidenceGrid {
         self.states = (0..n).map(|k| self.vote_state(k)).collect();
         if self.echo_reach > 0.0 {
             let reach = (self.echo_reach / self.cell).round() as usize;
-            let near = self.near_echo(reach);
+            let near = self.window_sums(&self.echo, reach);
             for (state, near) in self.states.iter_mut().zip(near) {
-                if *state == Surface::Transparent && !near {
+                if *state == Surface::Transparent && near == 0 {
                     *state = Surface::Open;
                 }
             }
         }
         if self.min_bare_passes > 0 {
-            let bare = self.neighbourhood_sums(&self.bare);
-            let echo = self.neighbourhood_sums(&self.echo);
+            let bare = self.window_sums(&self.bare, 1);
+            let echo = self.window_sums(&self.echo, 1);
             for (k, state) in self.states.iter_mut().enumerate() {
-                if *state == Surface::Transparent && echo[k] == 0 && bare[k] >= self.min_bare_passes
+                if *state == Surface::Transparent
+                    && echo[k] == 0
+                    && bare[k] >= self.min_bare_passes as u64
                 {
                     *state = Surface::Open;
                 }
@@ -187,35 +189,18 @@ impl EvidenceGrid {
         }
     }
 
-    /// Per cell, the sum of `counts` over it and its 8 neighbours.
-    fn neighbourhood_sums(&self, counts: &[u32]) -> Vec<u32> {
-        let (cols, rows) = (self.cols as isize, self.rows as isize);
-        (0..self.cols * self.rows)
-            .map(|k| {
-                let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
-                let mut total = 0;
-                for y in (j - 1).max(0)..=(j + 1).min(rows - 1) {
-                    for x in (i - 1).max(0)..=(i + 1).min(cols - 1) {
-                        total += counts[(y * cols + x) as usize];
-                    }
-                }
-                total
-            })
-            .collect()
-    }
-
-    /// Per cell, whether a cell with a surface echo lies within `reach`
-    /// cells in both directions (a square window, counted with a summed-area
-    /// table).
-    fn near_echo(&self, reach: usize) -> Vec<bool> {
+    /// Per cell, the sum of `counts` over the square window of `reach`
+    /// cells in every direction around it (clipped at the grid's edges),
+    /// from a summed-area table.
+    fn window_sums(&self, counts: &[u32], reach: usize) -> Vec<u64> {
         let (cols, rows) = (self.cols, self.rows);
-        let mut sum = vec![0u32; (cols + 1) * (rows + 1)];
+        let mut sum = vec![0u64; (cols + 1) * (rows + 1)];
         for j in 0..rows {
             for i in 0..cols {
-                let e = (self.echo[j * cols + i] > 0) as u32;
-                sum[(j + 1) * (cols + 1) + i + 1] =
-                    e + sum[j * (cols + 1) + i + 1] + sum[(j + 1) * (cols + 1) + i]
-                        - sum[j * (cols + 1) + i];
+                sum[(j + 1) * (cols + 1) + i + 1] = counts[j * cols + i] as u64
+                    + sum[j * (cols + 1) + i + 1]
+                    + sum[(j + 1) * (cols + 1) + i]
+                    - sum[j * (cols + 1) + i];
             }
         }
         let mut out = Vec::with_capacity(cols * rows);
@@ -223,10 +208,11 @@ impl EvidenceGrid {
             let (y0, y1) = (j.saturating_sub(reach), (j + reach + 1).min(rows));
             for i in 0..cols {
                 let (x0, x1) = (i.saturating_sub(reach), (i + reach + 1).min(cols));
-                let total = sum[y1 * (cols + 1) + x1] + sum[y0 * (cols + 1) + x0]
-                    - sum[y0 * (cols + 1) + x1]
-                    - sum[y1 * (cols + 1) + x0];
-                out.push(total > 0);
+                out.push(
+                    sum[y1 * (cols + 1) + x1] + sum[y0 * (cols + 1) + x0]
+                        - sum[y0 * (cols + 1) + x1]
+                        - sum[y1 * (cols + 1) + x0],
+                );
             }
         }
         out
