@@ -99,6 +99,10 @@ pub struct BeamPlanes<'a> {
     windows: Option<Vec<Window>>,
     margin: f64,
     reach: f64,
+    /// How far beyond a plane's reflective extent its unseen continuation
+    /// reaches (0: none), with the chart boxes that bound it.
+    unseen_reach: f64,
+    unseen_extents: Vec<(Point2<f64>, Point2<f64>)>,
 }
 
 impl<'a> BeamPlanes<'a> {
@@ -110,6 +114,8 @@ impl<'a> BeamPlanes<'a> {
             windows: None,
             margin,
             reach: f64::INFINITY,
+            unseen_reach: 0.0,
+            unseen_extents: Vec::new(),
         }
     }
 
@@ -121,6 +127,8 @@ impl<'a> BeamPlanes<'a> {
             windows: Some(windows),
             margin: 0.0,
             reach: f64::INFINITY,
+            unseen_reach: 0.0,
+            unseen_extents: Vec::new(),
         }
     }
 
@@ -129,6 +137,22 @@ impl<'a> BeamPlanes<'a> {
     /// and the boundary test is skipped.
     pub fn with_reach(mut self, reach: f64) -> Self {
         self.reach = reach;
+        self
+    }
+
+    /// Also answer [`BeamPlanes::first_unseen`]: crossings up to `reach`
+    /// beyond a plane's reflective extent, where the plane may be glass that
+    /// no echo showed ([`BoundedPlane::beyond_seen_extent_2d`]; hull
+    /// boundaries only, 0: none).
+    pub fn with_unseen_extent(mut self, reach: f64) -> Self {
+        if reach > 0.0 && self.windows.is_none() {
+            self.unseen_reach = reach;
+            self.unseen_extents = self
+                .planes
+                .iter()
+                .map(|bp| bp.extent_2d(self.margin.max(0.0) + reach))
+                .collect();
+        }
         self
     }
 
@@ -190,6 +214,39 @@ impl<'a> BeamPlanes<'a> {
 }
 
 impl BeamPlanes<'_> {
+    /// The nearest plane the beam towards `p` crosses more than `behind`
+    /// before reaching `p`, within the unseen continuation of its extent
+    /// ([`BeamPlanes::with_unseen_extent`]): `(plane index, range of the
+    /// crossing)`. For a beam that crosses no plane inside its extent: if
+    /// this finds one, the point may lie behind glass nobody saw.
+    pub fn first_unseen(&self, p: &Point3<f64>, behind: f64) -> Option<(usize, f64)> {
+        if !(self.unseen_reach > 0.0) {
+            return None;
+        }
+        let range = p.coords.norm();
+        if !(range > 0.0) {
+            return None;
+        }
+        let dir: Vector3<f64> = p.coords / range;
+        let origin = Point3::origin();
+        let mut best: Option<(usize, f64)> = None;
+        for (k, bp) in self.planes.iter().enumerate() {
+            let Some(t) = crossing_along(&bp.plane, &dir) else {
+                continue;
+            };
+            if t >= range - behind || best.is_some_and(|(_, bt)| bt <= t) {
+                continue;
+            }
+            let uv = bp.chart.to_2d(&(origin + dir * t));
+            let (lo, hi) = self.unseen_extents[k];
+            let boxed = uv.x >= lo.x && uv.x <= hi.x && uv.y >= lo.y && uv.y <= hi.y;
+            if boxed && bp.beyond_seen_extent_2d(&uv, self.unseen_reach) {
+                best = Some((k, t));
+            }
+        }
+        best
+    }
+
     /// Whether the beam towards `p`, which crosses plane `first` at range
     /// `t`, meets another pane between `glass` beyond that crossing and
     /// `behind` before `p`: past a second pane the first one's mirror says

@@ -102,7 +102,8 @@ impl PlaneMapClassifier {
     /// [`FrameInput::beam_hits`] to run it only once per frame.
     pub fn beam_hits(&self, input: &FrameInput<'_>) -> BeamHits {
         let planes = Self::planes_in_sensor_frame(input);
-        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin);
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin)
+            .with_unseen_extent(self.params.decision.unseen_extent);
         BeamHits::compute(
             input.frame,
             input.scan,
@@ -125,7 +126,9 @@ impl PlaneMapClassifier {
             .enumerate()
             .filter(|(i, pt)| {
                 let p = pt.position();
-                match hits.get(*i, &p, &planes) {
+                // A return behind a plane's unseen continuation may be a
+                // mirror image: not a surface seen directly.
+                match hits.get(*i, &p, &planes).or(hits.unseen(*i, &p, &planes)) {
                     None => true,
                     Some(h) => p.coords.norm() < h.range - glass,
                 }

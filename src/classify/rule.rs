@@ -55,10 +55,14 @@ pub enum Rule {
     /// Measured on a surface seen directly from elsewhere in the sequence:
     /// real, an Obstacle.
     SeenSurface = 15,
+    /// Behind a plane just beyond its seen reflective extent, where glass
+    /// may continue without an echo: its mirror image lands on a seen
+    /// surface, and no surface was seen where it was measured: Reflection.
+    PastSeenExtent = 16,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 16] = [
+pub const RULES: [Rule; 17] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -75,6 +79,7 @@ pub const RULES: [Rule; 16] = [
     Rule::ObliqueEcho,
     Rule::BehindMirror,
     Rule::SeenSurface,
+    Rule::PastSeenExtent,
 ];
 
 impl Rule {
@@ -102,6 +107,7 @@ impl Rule {
             Rule::ObliqueEcho => "oblique-echo",
             Rule::BehindMirror => "behind-mirror",
             Rule::SeenSurface => "seen-surface",
+            Rule::PastSeenExtent => "past-seen-extent",
         }
     }
 }

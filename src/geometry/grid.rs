@@ -72,6 +72,9 @@ pub struct EvidenceGrid {
     pub peak_cos: f64,
     /// Cell states computed by [`EvidenceGrid::finalize`] (empty before).
     states: Vec<Surface>,
+    /// Per cell, whether glass could be there unseen
+    /// ([`EvidenceGrid::could_hide_glass`]), computed by `finalize`.
+    may_hide_glass: Vec<bool>,
 }
 
 impl EvidenceGrid {
@@ -111,6 +114,7 @@ impl EvidenceGrid {
             glass_echo_intensity: None,
             peak_cos: 1.0,
             states: Vec::new(),
+            may_hide_glass: Vec::new(),
         })
     }
 
@@ -146,6 +150,7 @@ impl EvidenceGrid {
             open: vec![0; self.open.len()],
             bare: vec![0; self.bare.len()],
             states: Vec::new(),
+            may_hide_glass: Vec::new(),
             ..self.clone()
         }
     }
@@ -157,6 +162,13 @@ impl EvidenceGrid {
     pub fn finalize(&mut self) {
         let n = self.cols * self.rows;
         self.states = (0..n).map(|k| self.vote_state(k)).collect();
+        let bare = self.window_sums(&self.bare, 1);
+        self.may_hide_glass = self
+            .states
+            .iter()
+            .zip(&bare)
+            .map(|(s, b)| *s != Surface::Opaque && *b == 0)
+            .collect();
         if self.echo_reach > 0.0 {
             let reach = (self.echo_reach / self.cell).round() as usize;
             let near = self.window_sums(&self.echo, reach);
@@ -365,6 +377,36 @@ impl EvidenceGrid {
         if let Some(s) = self.states.get_mut(index) {
             *s = Surface::Open;
         }
+        if let Some(m) = self.may_hide_glass.get_mut(index) {
+            *m = false;
+        }
+    }
+
+    /// Whether glass could be at `uv` without the evidence showing it:
+    /// the votes there are not mostly opaque, no beam passed the cell or
+    /// its neighbours near normal incidence without an echo (glass would
+    /// have answered), and the sensor did not pass through it. True
+    /// outside the grid, where nothing is known. Passes far from the
+    /// landmark's echoes make a cell [`Surface::Open`] but not this: away
+    /// from normal incidence glass stays silent.
+    pub fn could_hide_glass(&self, uv: &Point2<f64>) -> bool {
+        let Some(k) = self.index(uv) else {
+            return true;
+        };
+        if let Some(m) = self.may_hide_glass.get(k) {
+            return *m;
+        }
+        let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
+        let mut bare = 0u32;
+        for dj in -1..=1 {
+            for di in -1..=1 {
+                let (x, y) = (i + di, j + dj);
+                if x >= 0 && y >= 0 && (x as usize) < self.cols && (y as usize) < self.rows {
+                    bare += self.bare[y as usize * self.cols + x as usize];
+                }
+            }
+        }
+        self.vote_state(k) != Surface::Opaque && bare == 0
     }
 
     /// The state of cell `index`: the majority of the votes over the cell
@@ -448,6 +490,33 @@ mod tests {
         g.fill_between_votes_only = true;
         assert_eq!(g.cell_state(edge), Surface::Unknown);
         assert_eq!(g.cell_state(hole), Surface::Transparent);
+    }
+
+    #[test]
+    fn glass_hides_only_where_no_bare_pass_or_opaque_majority_is() {
+        let mut g =
+            EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(2.0, 2.0), 0.2, 1, 100).unwrap();
+        let (open, wall, bare) = (
+            g.centre(2 * g.cols + 2),
+            g.centre(7 * g.cols + 2),
+            g.centre(2 * g.cols + 7),
+        );
+        for _ in 0..3 {
+            g.vote_open(&open);
+            g.vote(&wall, 0, 1);
+            g.vote_bare(&bare);
+        }
+        g.finalize();
+        // Passes far from any echo make a cell Open, yet glass may be there.
+        assert_eq!(g.state(&open), Surface::Open);
+        assert!(g.could_hide_glass(&open));
+        assert!(!g.could_hide_glass(&wall));
+        assert!(!g.could_hide_glass(&bare));
+        // Outside the grid nothing is known.
+        assert!(g.could_hide_glass(&Point2::new(-1.0, -1.0)));
+        let k = g.index(&open).unwrap();
+        g.set_open(k);
+        assert!(!g.could_hide_glass(&open));
     }
 
     #[test]

@@ -503,7 +503,12 @@ impl<'a> FrameViews<'a> {
                         continue;
                     }
                     let pos = pt.position();
-                    let (end_range, hit) = match hits.get(i, &pos, &sensor_planes) {
+                    // Behind a pane, or behind a plane's unseen
+                    // continuation where glass may be: carve to the plane.
+                    let crossing =
+                        hits.get(i, &pos, &sensor_planes)
+                            .or(hits.unseen(i, &pos, &sensor_planes));
+                    let (end_range, hit) = match crossing {
                         Some(h) if range >= h.range - glass => (h.range.min(range), false),
                         _ => (range, true),
                     };

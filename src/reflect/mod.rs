@@ -104,6 +104,37 @@ impl BoundedPlane {
         }
     }
 
+    /// Whether the plane point `uv` (chart coordinates) lies just beyond the
+    /// reflective extent, within `reach` of it, where the evidence allows
+    /// unseen glass ([`EvidenceGrid::could_hide_glass`]): glass may well
+    /// continue there.
+    /// Glass echoes only near normal incidence, so a pane's top above the
+    /// sensor or its far edge seen obliquely gives no echo; the extent stops
+    /// at the last echo, the glass does not.
+    pub fn beyond_seen_extent_2d(&self, uv: &Point2<f64>, reach: f64) -> bool {
+        if !(reach > 0.0) {
+            return false;
+        }
+        if self
+            .evidence
+            .as_ref()
+            .is_some_and(|e| !e.could_hide_glass(uv))
+        {
+            return false;
+        }
+        if self.bounds_2d(uv, 0.0) {
+            return false;
+        }
+        let distance = match &self.panes {
+            Some(panes) => panes
+                .iter()
+                .map(|p| p.signed_distance(uv))
+                .fold(f64::INFINITY, f64::min),
+            None => self.boundary.signed_distance(uv),
+        };
+        distance <= reach
+    }
+
     /// A box in chart coordinates, `(min, max)`, outside which
     /// [`BoundedPlane::bounds`] with this `margin` is false: a cheap test
     /// that spares most beams the boundary and evidence lookups.

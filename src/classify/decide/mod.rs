@@ -146,6 +146,17 @@ pub struct DecisionParams {
     /// glass (glass doors and partitions seen through one another), while
     /// the geometric tests say nothing past a second pane.
     pub echo_strength_past_second_pane: bool,
+    /// A reflective landmark may continue as glass up to this far beyond
+    /// its seen extent, where its evidence calls the plane neither opaque
+    /// nor open, m (0: off). Glass echoes only near normal incidence, so
+    /// the top of a tall pane above the sensor gives none and its extent
+    /// ends short. A point whose beam crossed that continuation is tested
+    /// like a point behind glass, but only by the evidence of the whole
+    /// sequence: a Reflection where its real position is refuted, or where
+    /// its mirror image lands on a seen surface and no surface was seen
+    /// where it was measured; Normal otherwise. The space seen directly
+    /// takes no surface from such beams.
+    pub unseen_extent: f64,
 }
 
 impl Default for DecisionParams {
@@ -174,6 +185,7 @@ impl Default for DecisionParams {
             seen_surface_test: false,
             seen_surface_echo_reach: 0.0,
             echo_strength_past_second_pane: false,
+            unseen_extent: 0.0,
         }
     }
 }
@@ -194,7 +206,13 @@ enum Beam {
     Oblique,
     Front,
     Band,
-    Behind { plane: u16 },
+    Behind {
+        plane: u16,
+    },
+    /// Behind the unseen continuation of a plane's extent.
+    Unseen {
+        plane: u16,
+    },
 }
 
 /// Where a point's beam first crosses a reflective plane inside its
@@ -219,6 +237,9 @@ pub struct BeamHits {
 }
 
 const NO_PLANE: u32 = u32::MAX;
+/// Flag on a plane index: the beam crosses the plane's unseen continuation
+/// ([`BeamPlanes::first_unseen`]), not its reflective extent.
+const UNSEEN: u32 = 1 << 31;
 
 impl BeamHits {
     /// The first crossings of `planes` up to `reach` beyond each point of
@@ -237,9 +258,13 @@ impl BeamHits {
             .enumerate()
             .map(|(i, pt)| {
                 let (ring, col) = scan.ring_column(scan.cell_of(i));
-                planes
-                    .first_hit(&pt.position(), Some((ring, col, columns)))
-                    .map_or(NO_PLANE, |(k, _)| k as u32)
+                let p = pt.position();
+                match planes.first_hit(&p, Some((ring, col, columns))) {
+                    Some((k, _)) => k as u32,
+                    None => planes
+                        .first_unseen(&p, reach)
+                        .map_or(NO_PLANE, |(k, _)| k as u32 | UNSEEN),
+                }
             })
             .collect();
         Self { first }
@@ -260,10 +285,25 @@ impl BeamHits {
     #[inline]
     pub fn get(&self, i: usize, p: &Point3<f64>, planes: &[BoundedPlane]) -> Option<BeamHit> {
         let k = *self.first.get(i)?;
-        if k == NO_PLANE {
+        if k == NO_PLANE || k & UNSEEN != 0 {
             return None;
         }
         let plane = k as usize;
+        let range = beam_crossing(&planes.get(plane)?.plane, p)?;
+        Some(BeamHit { plane, range })
+    }
+
+    /// For a point whose beam crosses no plane inside its extent: the plane
+    /// whose unseen continuation it crossed on its way, if the beam test
+    /// looked for one ([`BeamPlanes::with_unseen_extent`]). The point may
+    /// lie behind glass that gave no echo.
+    #[inline]
+    pub fn unseen(&self, i: usize, p: &Point3<f64>, planes: &[BoundedPlane]) -> Option<BeamHit> {
+        let k = *self.first.get(i)?;
+        if k == NO_PLANE || k & UNSEEN == 0 {
+            return None;
+        }
+        let plane = (k & !UNSEEN) as usize;
         let range = beam_crossing(&planes.get(plane)?.plane, p)?;
         Some(BeamHit { plane, range })
     }
@@ -323,7 +363,12 @@ pub fn decide_with_hits(
         .map(|(i, pt)| {
             let p = pt.position();
             match hits.get(i, &p, bounded) {
-                None => Beam::Clear,
+                None => match hits.unseen(i, &p, bounded) {
+                    Some(h) if p.coords.norm() - h.range > params.behind_distance => Beam::Unseen {
+                        plane: h.plane as u16,
+                    },
+                    _ => Beam::Clear,
+                },
                 Some(BeamHit { plane: k, range: t }) => {
                     let s = p.coords.norm() - t;
                     if s.abs() <= params.glass_distance {
@@ -366,7 +411,7 @@ pub fn decide_with_hits(
     let (mut classes, mut rules): (Vec<Class>, Vec<Rule>) = beams
         .iter()
         .map(|b| match b {
-            Beam::Clear => (Class::Normal, Rule::NoPane),
+            Beam::Clear | Beam::Unseen { .. } => (Class::Normal, Rule::NoPane),
             Beam::Front => (Class::Normal, Rule::InFront),
             Beam::WallEcho => (Class::Normal, Rule::WallEcho),
             Beam::Oblique => (Class::Normal, Rule::ObliqueEcho),
@@ -403,6 +448,21 @@ pub fn decide_with_hits(
     // 2. Evidence for behind-plane points: obstacle tests first.
     let is_last = |i: usize| frame.points[i].ret == 2 || scan.second(scan.cell_of(i)).is_none();
     for i in 0..n {
+        if let Beam::Unseen { plane } = beams[i] {
+            if let Some(decision) = past_seen_extent(
+                frame,
+                scan,
+                sensor,
+                &bounded[plane as usize],
+                i,
+                params,
+                support,
+                space,
+            ) {
+                (classes[i], rules[i]) = decision;
+            }
+            continue;
+        }
         let Beam::Behind { plane } = beams[i] else {
             continue;
         };
@@ -567,6 +627,69 @@ pub fn decide_with_hits(
         }
     }
     Decisions { classes, rules }
+}
+
+/// The decision for point `i` behind the unseen continuation of `bp`'s
+/// extent ([`DecisionParams::unseen_extent`]), from the sequence's evidence
+/// only (the frame's depth, free-space and echo tests assume a pane):
+/// `None` keeps it Normal.
+#[allow(clippy::too_many_arguments)]
+fn past_seen_extent(
+    frame: &Frame,
+    scan: &OrganizedScan,
+    sensor: &SensorModel,
+    bp: &BoundedPlane,
+    i: usize,
+    params: &DecisionParams,
+    support: Option<&dyn SurfaceSupport>,
+    space: Option<&SensorFrameSpace<'_>>,
+) -> Option<(Class, Rule)> {
+    let p = frame.points[i].position();
+    if let Some(space) = space.filter(|_| params.space_test) {
+        match two_hypotheses(
+            space,
+            support,
+            params.support_radius,
+            &bp.plane,
+            &p,
+            params.space_margin,
+            params.space_clearance_ratio,
+        ) {
+            Verdict::Mirror => return Some((Class::Reflection, Rule::RealRefuted)),
+            Verdict::Real => return Some((Class::Normal, Rule::MirrorRefuted)),
+            Verdict::Open => {}
+        }
+        if params.seen_surface_test && space.occupancy(&p) == Occupancy::Occupied {
+            return Some((Class::Normal, Rule::SeenSurface));
+        }
+    }
+    // A reflection off glass is weak: a return as strong as the landmark's
+    // transmitted echoes (a direct return is stronger still) is real.
+    if let Some(split) = &bp.echo_split {
+        let cos = if split.incidence_correction {
+            scan.incidence_cos(frame, i).unwrap_or(1.0)
+        } else {
+            1.0
+        };
+        if split.reflected(frame.points[i].intensity, p.coords.norm(), cos) == Some(false) {
+            return Some((Class::Normal, Rule::EchoStrength));
+        }
+    }
+    if !params.support_test {
+        return None;
+    }
+    let mirrored = bp.plane.mirror(&p);
+    let on_beam = returns_along(
+        scan,
+        sensor,
+        frame,
+        &mirrored,
+        params.free_space_neighbourhood,
+    )
+    .is_some_and(|(closest, _)| (closest - mirrored.coords.norm()).abs() <= params.support_range);
+    let nearby = params.support_radius > 0.0
+        && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
+    (on_beam || nearby).then_some((Class::Reflection, Rule::PastSeenExtent))
 }
 
 #[cfg(test)]

@@ -92,7 +92,7 @@ fn decide_in(
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     let f = frame(points, intensity);
     let scan = OrganizedScan::build(&f, &sensor).unwrap();
-    let beams = BeamPlanes::hulls(planes, 0.0);
+    let beams = BeamPlanes::hulls(planes, 0.0).with_unseen_extent(params.unseen_extent);
     let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
     let view = space.in_sensor_frame(Isometry3::identity());
     decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view))
@@ -498,4 +498,83 @@ fn the_near_return_of_an_obstacle_beam_is_a_reflection() {
         (with.classes[1], with.rules[1]),
         (Class::Reflection, Rule::DualReturn)
     );
+}
+
+/// Glass may continue past the last echo (a tall pane's top above the
+/// sensor gives none). A point behind the plane 0.3 m above the pane's
+/// seen top, whose mirror image lands on a surface the frame saw, is a
+/// Reflection with the rule on; without it, or where the evidence saw an
+/// opaque plane there, it is Normal.
+#[test]
+fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_supported() {
+    use crate::geometry::grid::EvidenceGrid;
+    use nalgebra::Point2;
+    // Behind the plane at (6, 0, 2.76): its beam crosses x = 5 at z = 2.3,
+    // above the pane's top (z = 2). Its mirror image (4, 0, 2.76) is a
+    // surface the frame saw.
+    let points = [[6.0f32, 0.0, 2.76], [4.0, 0.0, 2.76]];
+    let run = |planes: &[BoundedPlane], unseen_extent: f64| {
+        let params = DecisionParams {
+            support_test: true,
+            support_radius: 0.3,
+            unseen_extent,
+            ..rule_only(false)
+        };
+        decide_in(&points, 50.0, planes, &params, &SpaceMap::new(0.1, 2, 1))
+    };
+    let d = run(&pane(), 1.0);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::PastSeenExtent)
+    );
+    assert_eq!(d.classes[1], Class::Normal);
+    let d = run(&pane(), 0.0);
+    assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
+    // Out of reach: 0.2 m past the top is within 0.25 m, 0.3 m is not.
+    let d = run(&pane(), 0.25);
+    assert_eq!(d.classes[0], Class::Normal);
+    // Opaque votes where the beam crosses: a wall strip above the pane.
+    let mut planes = pane();
+    let chart = planes[0].chart;
+    let mut grid = EvidenceGrid::new(
+        Point2::new(-5.0, -5.0),
+        Point2::new(5.0, 5.0),
+        0.2,
+        3,
+        1_000_000,
+    )
+    .expect("a grid");
+    grid.vote(&chart.to_2d(&Point3::new(5.0, 0.0, 2.3)), 0, 5);
+    grid.finalize();
+    planes[0].evidence = Some(std::sync::Arc::new(grid));
+    let d = run(&planes, 1.0);
+    assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
+}
+
+/// Past the seen extent the sequence's space decides too: where the point
+/// was measured, other beams saw free space, so it is a mirror image.
+#[test]
+fn a_point_past_the_seen_extent_in_seen_free_space_is_a_reflection() {
+    // Space behind the plane seen free from a pose beyond it.
+    let mut space = SpaceMap::new(0.1, 2, 1);
+    let origin = Point3::new(9.0, 0.0, 2.76);
+    for j in -5..=5 {
+        for k in -5..=5 {
+            let end = Point3::new(5.2, j as f64 * 0.05, 2.76 + k as f64 * 0.05);
+            space.add_beam(&origin, &end, 0.0, false);
+        }
+    }
+    let run = |unseen_extent: f64| {
+        let params = DecisionParams {
+            unseen_extent,
+            ..rule_only(true)
+        };
+        decide_in(&[[6.0, 0.0, 2.76]], 50.0, &pane(), &params, &space)
+    };
+    let d = run(1.0);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::RealRefuted)
+    );
+    assert_eq!(run(0.0).classes, [Class::Normal]);
 }
