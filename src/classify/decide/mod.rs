@@ -134,10 +134,11 @@ pub struct DecisionParams {
     /// sequence (an occupied voxel of the space map) is real: an Obstacle.
     /// Tested after the echo strength, before the mirror-image support.
     pub seen_surface_test: bool,
-    /// Such a real point is an Obstacle only where the pane produced glass
-    /// echoes within this distance of the beam's crossing (its evidence
-    /// grid); with none there the beam passed an opening in the plane (a
-    /// door, a gap the pane's extent covers) and the point is Normal, m
+    /// A point found real by the seen-surface test or by its echo strength
+    /// is an Obstacle only where the pane produced glass echoes within this
+    /// distance of the beam's crossing (its evidence grid); with none there
+    /// the beam passed an opening in the plane (a door, the air above a
+    /// railing, a gap the pane's extent covers) and the point is Normal, m
     /// (0: always an Obstacle).
     pub seen_surface_echo_reach: f64,
     /// The first pane's echo split also decides beams that met a second
@@ -559,12 +560,17 @@ pub fn decide_with_hits(
         } else {
             None
         };
-        if let Some(reflected) = verdict {
-            classes[i] = if reflected {
-                Class::Reflection
-            } else {
+        // Real where it was measured: through glass, or through an opening
+        // in the plane where the pane's extent overreaches its echoes.
+        let real = || {
+            if through_glass(bp, &p, t, params.seen_surface_echo_reach) {
                 Class::Obstacle
-            };
+            } else {
+                Class::Normal
+            }
+        };
+        if let Some(reflected) = verdict {
+            classes[i] = if reflected { Class::Reflection } else { real() };
             rules[i] = Rule::EchoStrength;
             continue;
         }
@@ -575,18 +581,7 @@ pub fn decide_with_hits(
             && single_pane
             && space.is_some_and(|s| s.occupancy(&p) == Occupancy::Occupied)
         {
-            // Real: through glass, or through an opening in the plane.
-            let through_glass = params.seen_surface_echo_reach <= 0.0
-                || bp.evidence.as_ref().is_none_or(|e| {
-                    let crossing = Point3::from(p.coords * (t / p.coords.norm()));
-                    e.echoes_near(&bp.chart.to_2d(&crossing), params.seen_surface_echo_reach) > 0
-                });
-            classes[i] = if through_glass {
-                Class::Obstacle
-            } else {
-                Class::Normal
-            };
-            rules[i] = Rule::SeenSurface;
+            (classes[i], rules[i]) = (real(), Rule::SeenSurface);
             continue;
         }
         if params.support_test {
@@ -627,6 +622,19 @@ pub fn decide_with_hits(
         }
     }
     Decisions { classes, rules }
+}
+
+/// Whether the beam towards `p`, crossing `bp` at range `t`, passed glass:
+/// the landmark gave glass echoes within `reach` of the crossing (its
+/// evidence grid). Without any there, a real point behind the plane was
+/// seen through an opening the pane's extent covers (a door, the air above
+/// a railing), and is Normal, not an Obstacle (`reach` 0: always glass).
+fn through_glass(bp: &BoundedPlane, p: &Point3<f64>, t: f64, reach: f64) -> bool {
+    reach <= 0.0
+        || bp.evidence.as_ref().is_none_or(|e| {
+            let crossing = Point3::from(p.coords * (t / p.coords.norm()));
+            e.echoes_near(&bp.chart.to_2d(&crossing), reach) > 0
+        })
 }
 
 /// The decision for point `i` behind the unseen continuation of `bp`'s

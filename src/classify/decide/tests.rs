@@ -189,6 +189,33 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
         classify(&points, 9.8, &planes, &params),
         [Class::Unclassified]
     );
+    // A strong (real) echo whose beam crossed the plane far from every
+    // glass echo came through an opening the pane's extent covers: Normal
+    // with the echo reach set.
+    use crate::geometry::grid::EvidenceGrid;
+    let mut grid = EvidenceGrid::new(
+        nalgebra::Point2::new(-5.0, -5.0),
+        nalgebra::Point2::new(5.0, 5.0),
+        0.2,
+        3,
+        1_000_000,
+    )
+    .expect("a grid");
+    grid.vote_echo(&planes[0].chart.to_2d(&Point3::new(5.0, 1.8, 0.2)));
+    planes[0].evidence = Some(std::sync::Arc::new(grid));
+    let reach = |seen_surface_echo_reach| DecisionParams {
+        seen_surface_echo_reach,
+        ..params
+    };
+    let opening = decide_in(&points, 100.0, &planes, &reach(0.6), &room_space());
+    assert_eq!(
+        (opening.classes[0], opening.rules[0]),
+        (Class::Normal, Rule::EchoStrength)
+    );
+    assert_eq!(
+        classify(&points, 100.0, &planes, &reach(2.0)),
+        [Class::Obstacle]
+    );
 }
 
 /// A mullion on the pane's plane: a single echo met 60 degrees off the
