@@ -5,21 +5,21 @@
 #
 #   scripts/same-outputs.sh BASE_REV [FRAMES_DIR]
 #
-# FRAMES_DIR: real 3DRef frames with their poses (default: the ten shared
-# frames, ../shared/data/3dref-seq1-demo). The runs:
+# FRAMES_DIR: real 3DRef frames with their poses in hesai_pose.txt (default:
+# the ten shared frames, ../shared/data/3dref-seq1-demo). The runs:
 #
-#   simulate  office, corridor and mirror-room, 6 frames each (the frames,
-#             poses.txt and planes.json the simulator writes are compared too)
-#   detect    FRAMES_DIR and each scene, plane-optimized (default method)
-#             and single-scan
-#   slam      FRAMES_DIR and each scene, with classification
+#   simulate  office, corridor and lobby, 6 frames each, by each
+#             binary (the frames, poses.txt and planes.json are compared)
+#   detect    FRAMES_DIR and each scene (as the base simulated it, so both
+#             binaries read the same paths), plane-optimized and single-scan
+#   slam      the same inputs, with classification
 #
 # Compared: every file of every run (predictions/*.label, planes.json,
 # poses.txt, around_corner.ply, metrics.json, frames.csv, ...) except the
 # ones that hold wall-clock times (report.md, run.mcap, timings.png and the
 # plots); in metrics.json the timing fields ("timings", "wall_s",
-# "frames_per_s") and the provenance ("specular": version, commit) are
-# removed first, and frames.csv loses its time_ms column. Exit status 0 when
+# "frames_per_s", "frames_per_cpu_second", the back-end report's "seconds")
+# and the provenance ("specular": version, commit) are removed first, and frames.csv loses its time_ms column. Exit status 0 when
 # everything is identical, 1 with the differing files listed otherwise.
 #
 # Environment: CARGO_TARGET_DIR is the work tree's target directory (default
@@ -39,6 +39,7 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 frames=${2:-$repo/../shared/data/3dref-seq1-demo}
 [ -d "$frames" ] || { echo "error: no frame directory $frames" >&2; exit 2; }
 frames=$(cd "$frames" && pwd)
+[ -f "$frames/hesai_pose.txt" ] || { echo "error: no $frames/hesai_pose.txt" >&2; exit 2; }
 base_sha=$(git -C "$repo" rev-parse --verify "$base_rev^{commit}")
 work_target=${CARGO_TARGET_DIR:-$repo/target}
 base_target=${BASE_TARGET_DIR:-$work_target-base}
@@ -57,22 +58,32 @@ log "building base ${base_sha:0:7} into $base_target"
 log "building the work tree into $work_target"
 (cd "$repo" && CARGO_TARGET_DIR=$work_target cargo build --release --quiet --bin specular)
 
-scenes=(office corridor mirror-room)
+scenes=(office corridor lobby)
 
-# Every run of one binary into $2.
+# The simulated scenes, made by binary $1 into $2.
+simulate_all() {
+    local bin=$1 out=$2
+    mkdir -p "$out"
+    for scene in "${scenes[@]}"; do
+        "$bin" --quiet simulate --scene "$scene" --frames 6 --out "$out/sim-$scene" >/dev/null
+    done
+}
+
+# Every run of binary $1 into $2, on the real frames and on the scenes
+# simulated by the base (the same input paths for both binaries: some
+# outputs name their input).
 run_all() {
     local bin=$1 out=$2
     mkdir -p "$out"
     local q=(--quiet)
+    # name|frame directory|pose file
+    local inputs=("real|$frames|$frames/hesai_pose.txt")
     for scene in "${scenes[@]}"; do
-        "$bin" "${q[@]}" simulate --scene "$scene" --frames 6 --out "$out/sim-$scene" >/dev/null
+        inputs+=("$scene|$tmp/base/sim-$scene/frames|$tmp/base/sim-$scene/poses.txt")
     done
-    local inputs=("real:$frames")
-    for scene in "${scenes[@]}"; do inputs+=("$scene:$out/sim-$scene"); done
     for input in "${inputs[@]}"; do
-        local name=${input%%:*} dir=${input#*:}
-        local pose_file=$dir/poses.txt
-        [ -f "$pose_file" ] || pose_file=$dir/hesai_pose.txt
+        local name dir pose_file
+        IFS='|' read -r name dir pose_file <<<"$input"
         local poses=(--poses "$pose_file") truth=(--gt-poses "$pose_file")
         "$bin" "${q[@]}" detect --frames "$dir" "${poses[@]}" --no-mcap \
             --out "$out/detect-po-$name" >/dev/null
@@ -88,7 +99,8 @@ normalise() {
     local out=$1
     find "$out" -name metrics.json | while read -r f; do
         jq -S 'del(.specular) | walk(if type == "object" then
-                 del(.timings, .wall_s, .frames_per_s) else . end)' "$f" >"$f.tmp"
+                 del(.timings, .wall_s, .frames_per_s, .seconds,
+                     .frames_per_cpu_second) else . end)' "$f" >"$f.tmp"
         mv "$f.tmp" "$f"
     done
     find "$out" -name frames.csv | while read -r f; do
@@ -107,8 +119,10 @@ EOF
 }
 
 log "running base"
+simulate_all "$base_target/release/specular" "$tmp/base"
 run_all "$base_target/release/specular" "$tmp/base"
 log "running work tree"
+simulate_all "$work_target/release/specular" "$tmp/work"
 run_all "$work_target/release/specular" "$tmp/work"
 normalise "$tmp/base"
 normalise "$tmp/work"

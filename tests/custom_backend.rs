@@ -81,7 +81,10 @@ fn a_custom_backend_is_used_by_the_slam_pipeline() {
         }))
     };
     let ours = optimize_tracked_with(tracked.clone(), &config, &make).unwrap();
-    assert!(solves.load(Ordering::Relaxed) >= 1, "the custom back-end ran");
+    assert!(
+        solves.load(Ordering::Relaxed) >= 1,
+        "the custom back-end ran"
+    );
     assert_eq!(ours.poses, by_name.poses);
     assert!(ours.backend.is_some());
 

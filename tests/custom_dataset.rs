@@ -82,13 +82,22 @@ fn a_custom_dataset_runs_through_the_plane_optimized_pipeline() {
     .unwrap();
     let custom = Sequence::new(dataset);
     assert_eq!(custom.len(), 8);
-    assert!(custom.poses.is_some(), "the dataset's poses are the sequence's");
+    assert!(
+        custom.poses.is_some(),
+        "the dataset's poses are the sequence's"
+    );
     assert!(custom.in_memory().is_none());
 
     let ours = run_plane_optimized(&custom, &config).unwrap();
     let reference = run_plane_optimized(&held, &config).unwrap();
-    assert!(made.load(Ordering::Relaxed) >= 8, "every frame was asked for");
-    assert!(!ours.map.landmarks.is_empty(), "the office has reflective planes");
+    assert!(
+        made.load(Ordering::Relaxed) >= 8,
+        "every frame was asked for"
+    );
+    assert!(
+        !ours.map.landmarks.is_empty(),
+        "the office has reflective planes"
+    );
     assert_eq!(ours.map.landmarks.len(), reference.map.landmarks.len());
     assert_eq!(ours.run.frames.len(), 8);
     for (a, b) in ours.run.frames.iter().zip(&reference.run.frames) {

@@ -71,3 +71,28 @@ impl Dataset for SimDataset {
         self.origin.clone()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Made one at a time, in any order, the frames and poses are the
+    /// simulation's; the sensor is the scene's.
+    #[test]
+    fn frames_on_demand_equal_the_simulation() {
+        let scene = Scene::resolve("demo").unwrap();
+        let run = super::super::simulate(&scene, Some(3), Some(7)).unwrap();
+        let dataset = SimDataset::new(&scene, Some(3), Some(7)).unwrap();
+        assert_eq!(dataset.len(), 3);
+        for k in [2, 0, 1] {
+            let frame = dataset.frame(k).unwrap();
+            assert_eq!(frame.name, run.frames[k].name);
+            assert_eq!(dataset.entries()[k].name, run.frames[k].name);
+            assert_eq!(frame.points, run.frames[k].points);
+        }
+        let poses: Vec<_> = run.poses.iter().map(|p| p.pose).collect();
+        assert_eq!(dataset.poses(), Some(poses));
+        assert_eq!(dataset.sensor(), Some(scene.sensor.model.clone()));
+        assert!(SimDataset::new(&scene, Some(0), None).is_err());
+    }
+}

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use specular::config::Config;
-use specular::pipeline::{Sequence, StageTimings};
 use nalgebra::Isometry3;
 use rayon::prelude::*;
+use specular::config::Config;
+use specular::pipeline::{Sequence, StageTimings};
 
 use specular::cloud::Frame;
 use specular::sim::{self, LabelCounts, Scene, SimFrame, Simulator};

@@ -11,8 +11,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Parser;
 use specular_paper::{
-    self as reproduce, data::resolve_real, readme, tables, timing, KissIcp, Options, Source,
-    SCENES,
+    self as reproduce, data::resolve_real, readme, tables, timing, KissIcp, Options, Source, SCENES,
 };
 
 #[cfg(feature = "mimalloc")]
