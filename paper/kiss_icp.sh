@@ -1,5 +1,5 @@
 #!/bin/sh
-# KISS-ICP for `specular reproduce --with-kiss-icp` (the command embeds and
+# KISS-ICP for `specular-reproduce --with-kiss-icp` (paper/reproduce/; it embeds and
 # calls this script; it can also be run by hand).
 #
 #   kiss_icp.sh install VENV                      create VENV, pip install kiss-icp

@@ -26,7 +26,10 @@
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
 //! | [`viz`] | Foxglove MCAP recordings, PNG plots, Markdown report |
-//! | [`reproduce`] | the paper's experiments side by side with its published tables |
+//!
+//! The paper's experiments beside its published tables are not in this
+//! crate: they use it from the workspace member `specular-paper`
+//! (`paper/reproduce/`, the `specular-reproduce` command).
 //!
 //! Conventions (kept everywhere): a plane is `n·x + d = 0` with `|n| = 1`;
 //! in a sensor frame `d > 0` (the sensor is on the positive side). Poses are
@@ -50,7 +53,6 @@ pub mod pipeline;
 pub mod progress;
 pub mod reflect;
 pub mod registration;
-pub mod reproduce;
 pub mod rng;
 pub mod sensor;
 pub mod sim;

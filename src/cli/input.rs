@@ -8,6 +8,7 @@ use anyhow::{bail, Result};
 use clap::Args;
 use specular::config::Config;
 use specular::io;
+use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::Sequence;
 
 /// The frames to read: `--frames DIR` or `--bag PATH --topic NAME`.
@@ -63,25 +64,25 @@ impl InputArgs {
     }
 
     /// The frames as a sequence, with each frame's pose from `poses` when
-    /// given (matched as `config.input` says). A frame directory is read
-    /// pass by pass, keeping at most `input.frame_cache_mb` of parsed
-    /// frames; a bag is read whole, its frames named by header stamp.
+    /// given (matched as `config.input` says). The dataset is chosen by
+    /// kind ([`registry::dataset`]); its frames are read pass by pass,
+    /// keeping at most `input.frame_cache_mb` of the frames read (a bag is
+    /// decoded whole, its frames named by header stamp).
     pub fn open(&self, poses: Option<&Path>, config: &Config) -> Result<Sequence> {
-        let matching = config.input.pose_matching();
-        let sequence = match (&self.frames, &self.bag) {
-            (Some(frames), _) => Sequence::open(frames, poses, matching)?
-                .with_frame_cache(config.input.frame_cache_mb),
-            (None, Some(bag)) => {
-                let topic = self.topic.as_deref().unwrap_or_default();
-                let frames = io::read_bag_frames(bag, topic)?;
-                let mut sequence = Sequence::from_frames(frames, None, &bag.display().to_string())?;
-                if let Some(path) = poses {
-                    sequence.poses = Some(io::read_poses_for(&sequence.entries, path, matching)?);
-                }
-                sequence
-            }
+        let source = match (&self.frames, &self.bag) {
+            (Some(frames), _) => DatasetSource::Frames(frames.clone()),
+            (None, Some(bag)) => DatasetSource::Bag {
+                path: bag.clone(),
+                topic: self.topic.clone().unwrap_or_default(),
+            },
             (None, None) => bail!("give --frames DIR or --bag PATH --topic NAME"),
         };
+        let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
+            .with_frame_cache(config.input.frame_cache_mb);
+        if let Some(path) = poses {
+            let matching = config.input.pose_matching();
+            sequence.poses = Some(io::read_poses_for(&sequence.entries, path, matching)?);
+        }
         if sequence.is_empty() {
             bail!("{}: no frames", self.path().display());
         }

@@ -8,7 +8,6 @@ mod eval;
 mod graph;
 mod input;
 mod output;
-mod reproduce;
 mod run_dir;
 
 pub(crate) use run_dir::interrupted;
@@ -54,8 +53,6 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Pose-plane factor graphs: export synthetic ones, solve graph files.
     Graph(graph::GraphArgs),
-    /// Reproduce the paper's experiments beside its published tables.
-    Reproduce(reproduce::ReproduceArgs),
     /// Print the effective configuration as TOML (every key with its value;
     /// for a file, first a comment naming the built-in it layers over and
     /// the keys it sets).
@@ -103,7 +100,6 @@ pub fn run() -> Result<()> {
         Command::Convert(args) => convert::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Graph(args) => graph::run(args),
-        Command::Reproduce(args) => reproduce::run(args),
         Command::Config { config } => {
             if Config::builtin_names().contains(&config.as_str()) {
                 print!("{}", Config::resolve(&config)?.to_toml());

@@ -1,4 +1,5 @@
-//! Input and output at the edge of the library: 3DRef PLY frames, ROS 2
+//! Input and output at the edge of the library: the [`Dataset`] seam (where
+//! a sequence's frames come from), 3DRef PLY frames, ROS 2
 //! bags (rosbag2 directories, MCAP and sqlite3 `.db3` files), TUM and KITTI pose files, prediction labels, and matching frames
 //! to poses by timestamp.
 //!
@@ -7,6 +8,7 @@
 //! failed run never leaves a half-written output.
 
 pub mod atomic;
+pub mod dataset;
 pub mod db3;
 pub mod frames;
 pub mod kitti;
@@ -19,6 +21,7 @@ pub mod rosbag2;
 pub mod tum;
 
 pub use atomic::write_atomic;
+pub use dataset::{Dataset, InMemory, PlyDir};
 pub use frames::{
     frame_dir, interpolate, list_frames, match_poses, match_poses_with, parse_stamp,
     read_poses_for, release_poses, FrameEntry, PoseMatching,
@@ -28,5 +31,5 @@ pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
-pub use ros2_bag::{read_bag_frames, BagKind};
+pub use ros2_bag::{read_bag_frames, BagKind, Ros2Bag};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

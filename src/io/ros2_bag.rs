@@ -18,10 +18,13 @@
 //! reader does (see [`crate::cloud::drop_non_finite`]); the other points
 //! keep their order and labels.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
+use super::dataset::{Dataset, InMemory};
+use super::frames::FrameEntry;
 use crate::cloud::{drop_non_finite, Frame, Point};
 use crate::{Error, Result};
 
@@ -50,6 +53,39 @@ pub fn read_bag_frames(path: &Path, topic: &str) -> Result<Vec<Frame>> {
         BagKind::Directory(dir) => return super::rosbag2::read_directory(&dir, frames),
     }
     frames.finish(path)
+}
+
+/// A bag's point-cloud topic as a [`Dataset`]: the frames are decoded
+/// when the bag is opened ([`read_bag_frames`]) and lent from memory.
+#[derive(Debug, Clone)]
+pub struct Ros2Bag {
+    frames: InMemory,
+}
+
+impl Ros2Bag {
+    /// The `PointCloud2` frames on `topic` of the bag at `path` (any form
+    /// [`BagKind::of`] knows), named by their header stamps.
+    pub fn open(path: &Path, topic: &str) -> Result<Self> {
+        let frames = read_bag_frames(path, topic)?;
+        Ok(Self {
+            frames: InMemory::new(frames, None, &path.display().to_string())?,
+        })
+    }
+}
+
+impl Dataset for Ros2Bag {
+    fn entries(&self) -> &[FrameEntry] {
+        self.frames.entries()
+    }
+    fn frame(&self, index: usize) -> Result<Cow<'_, Frame>> {
+        self.frames.frame(index)
+    }
+    fn in_memory(&self) -> Option<&[Frame]> {
+        self.frames.in_memory()
+    }
+    fn origin(&self) -> String {
+        self.frames.origin()
+    }
 }
 
 /// The forms of ROS 2 bag that [`read_bag_frames`] reads.

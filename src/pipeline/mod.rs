@@ -13,7 +13,10 @@ pub mod timings;
 pub use plane_optimized::{run_plane_optimized, run_plane_optimized_into, PlaneOptimizedOutput};
 pub use sequence::{stream_window, Sequence};
 pub use single_scan::{run_single_scan, run_single_scan_into};
-pub use slam::{optimize_tracked, run_slam, track_sequence, SlamOutput, Tracked};
+pub use slam::{
+    optimize_tracked, optimize_tracked_with, run_slam, track_sequence, MakeBackend, SlamOutput,
+    Tracked,
+};
 pub use timings::StageTimings;
 
 use std::path::Path;

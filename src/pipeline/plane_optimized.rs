@@ -88,7 +88,7 @@ pub fn run_plane_optimized_into(
     let poses = sequence.poses.as_ref().ok_or_else(|| {
         Error::Input("the plane-optimized method needs a pose per frame (--poses FILE)".into())
     })?;
-    let sensor = SensorModel::resolve(&config.sensor)?;
+    let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
     let mut timings = StageTimings::default();
 

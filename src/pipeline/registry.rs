@@ -1,13 +1,58 @@
 //! Name → implementation: the one place where configuration picks the
 //! implementations of the seams.
 
+use std::path::PathBuf;
+use std::sync::Arc;
+
 use crate::classify::{Classifier, PlaneMapClassifier, SingleScanClassifier};
 use crate::config::{Config, MergerName};
 use crate::frontend::{ExtractorName, PlaneExtractor, RegionGrowingExtractor};
+use crate::io::{Dataset, PlyDir, Ros2Bag};
 use crate::map::{MapMerger, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
 use crate::registration::{AcceptAll, GroundTripleRansac, MismatchRejector, RejectorName};
 use crate::sensor::SensorModel;
+use crate::sim::{Scene, SimDataset};
+use crate::Result;
+
+/// The kinds of [`Dataset`] chosen by name on the command line (a new
+/// kind: a type implementing [`Dataset`], a variant here and its arm in
+/// [`dataset`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum DatasetSource {
+    /// A 3DRef frame directory or release sequence ([`PlyDir`]).
+    Frames(PathBuf),
+    /// The `PointCloud2` topic of a ROS 2 bag ([`Ros2Bag`]).
+    Bag {
+        /// rosbag2 directory, `.mcap` or `.db3` file.
+        path: PathBuf,
+        /// The point-cloud topic.
+        topic: String,
+    },
+    /// A simulated scene, made frame by frame ([`SimDataset`]).
+    Simulated {
+        /// Built-in scene name or TOML file.
+        scene: String,
+        /// Number of frames (default: the scene's).
+        frames: Option<usize>,
+        /// Range-noise seed (default: the scene's).
+        seed: Option<u64>,
+    },
+}
+
+/// The dataset `source` names, opened (a directory listed, a bag decoded,
+/// a scene loaded); frames are read through it pass by pass.
+pub fn dataset(source: &DatasetSource) -> Result<Arc<dyn Dataset>> {
+    Ok(match source {
+        DatasetSource::Frames(dir) => Arc::new(PlyDir::open(dir)?),
+        DatasetSource::Bag { path, topic } => Arc::new(Ros2Bag::open(path, topic)?),
+        DatasetSource::Simulated {
+            scene,
+            frames,
+            seed,
+        } => Arc::new(SimDataset::new(&Scene::resolve(scene)?, *frames, *seed)?),
+    })
+}
 
 /// The reflective detector named in `[detector]`.
 pub fn detector(config: &Config, sensor: &SensorModel) -> Box<dyn ReflectiveDetector> {

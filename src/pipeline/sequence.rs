@@ -4,9 +4,12 @@
 //! memory, and the methods do not need it to: each pass over the sequence
 //! (detect, gather evidence, classify) reads a window of frames, works on
 //! them in parallel and hands the results on in sequence order before the
-//! next window is read ([`Sequence::stream`]). A sequence opened from a
-//! directory keeps only the file list; one built from frames already in
-//! memory (the simulator, a ROS 2 bag, tests) lends them out.
+//! next window is read ([`Sequence::stream`]). The frames come from a
+//! [`Dataset`] (a PLY directory, a bag, the simulator, frames in memory):
+//! the pipelines read frames only through a sequence, and a sequence only
+//! through its dataset. Frames the dataset lends (it holds them) are used
+//! as they are; frames it makes (parsed, simulated) are kept in a bounded
+//! cache, the first ones of the sequence, up to a budget of bytes.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -19,27 +22,31 @@ use rayon::prelude::*;
 
 use super::StageTimings;
 use crate::cloud::Frame;
-use crate::io::{self, FrameEntry};
+use crate::io::{self, Dataset, FrameEntry, InMemory, PlyDir};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
 
 /// Frames of one sequence in timestamp order, with their poses when given.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct Sequence {
-    /// The frame files (or, for frames built in memory, their names).
+    /// The frame files (or, for frames not read from files, their names).
     pub entries: Vec<FrameEntry>,
     /// `T_world_sensor` per frame (matched by timestamp), when known.
     pub poses: Option<Vec<Isometry3<f64>>>,
-    /// Where the points are.
-    store: FrameStore,
+    /// Where the frames come from.
+    dataset: Arc<dyn Dataset>,
+    /// The frames the dataset made, kept between passes up to a budget.
+    cache: Arc<FrameCache>,
 }
 
-/// Where a sequence's points are: parsed once and held, or read from their
-/// files, the first ones kept after their first read.
-#[derive(Debug, Clone)]
-enum FrameStore {
-    Memory(Vec<Frame>),
-    Files(Arc<FrameCache>),
+impl std::fmt::Debug for Sequence {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Sequence")
+            .field("origin", &self.dataset.origin())
+            .field("frames", &self.entries.len())
+            .field("poses", &self.poses.is_some())
+            .finish()
+    }
 }
 
 /// Megabytes of parsed frames a sequence read from files keeps by default
@@ -110,40 +117,51 @@ fn megabytes(mb: f64) -> usize {
 }
 
 impl Sequence {
+    /// The frames of `dataset`, with its own poses when it brings them,
+    /// keeping up to [`DEFAULT_FRAME_CACHE_MB`] of the frames it makes.
+    pub fn new(dataset: impl Dataset + 'static) -> Self {
+        Self::from_dataset(Arc::new(dataset))
+    }
+
+    /// [`new`](Self::new) for a dataset already shared.
+    pub fn from_dataset(dataset: Arc<dyn Dataset>) -> Self {
+        let entries = dataset.entries().to_vec();
+        let poses = dataset.poses();
+        let cache = FrameCache::new(entries.len(), megabytes(DEFAULT_FRAME_CACHE_MB));
+        Self {
+            entries,
+            poses,
+            dataset,
+            cache: Arc::new(cache),
+        }
+    }
+
     /// The `*.ply` frames of `dir` (or of the 3DRef release layout
     /// `dir/raycast/hesai/`, see [`io::frame_dir`]) and, when `poses` is
     /// given, each frame's pose (TUM, matched by timestamp as `matching`
     /// says, or KITTI, by order; [`io::read_poses_for`]). Nothing is
-    /// parsed: every pass reads the frames it needs.
+    /// parsed: every pass reads the frames it needs ([`PlyDir`]).
     pub fn open(
         dir: &Path,
         poses: Option<&Path>,
         matching: impl Into<io::PoseMatching>,
     ) -> Result<Self> {
-        let dir = io::frame_dir(dir);
-        let entries = io::list_frames(&dir)?;
+        let mut frames = PlyDir::open(dir)?;
         // Poses first: a missing pose is reported before any parsing work.
-        let poses = match poses {
-            Some(path) => Some(io::read_poses_for(&entries, path, matching.into())?),
-            None => None,
-        };
-        let cache = FrameCache::new(entries.len(), megabytes(DEFAULT_FRAME_CACHE_MB));
-        Ok(Self {
-            entries,
-            poses,
-            store: FrameStore::Files(Arc::new(cache)),
-        })
+        if let Some(path) = poses {
+            frames = frames.with_poses(path, matching.into())?;
+        }
+        Ok(Self::new(frames))
     }
 
-    /// Keep at most `megabytes` of parsed frames between passes (0: read
-    /// every frame at every pass). No effect on a sequence held in memory.
+    /// Keep at most `megabytes` of the frames the dataset makes between
+    /// passes (0: make every frame at every pass). No effect on frames the
+    /// dataset holds in memory.
     pub fn with_frame_cache(mut self, megabytes_kept: f64) -> Self {
-        if let FrameStore::Files(_) = self.store {
-            self.store = FrameStore::Files(Arc::new(FrameCache::new(
-                self.entries.len(),
-                megabytes(megabytes_kept),
-            )));
-        }
+        self.cache = Arc::new(FrameCache::new(
+            self.entries.len(),
+            megabytes(megabytes_kept),
+        ));
         self
     }
 
@@ -156,7 +174,7 @@ impl Sequence {
         tolerance: f64,
         timings: &mut StageTimings,
     ) -> Result<Self> {
-        let mut sequence = Self::open(dir, poses, tolerance)?;
+        let sequence = Self::open(dir, poses, tolerance)?;
         let bar = crate::progress::bar(sequence.len(), "parse");
         let parsed: Vec<(Frame, Duration)> = sequence
             .entries
@@ -174,39 +192,20 @@ impl Sequence {
             timings.add("parse", d);
             frames.push(f);
         }
-        sequence.store = FrameStore::Memory(frames);
-        Ok(sequence)
+        let origin = sequence.dataset.origin();
+        let held = InMemory::with_entries(sequence.entries, frames, sequence.poses, &origin)?;
+        Ok(Self::new(held))
     }
 
     /// A sequence of frames already in memory (e.g. from the simulator),
-    /// with their poses when known. `origin` names the source in messages.
+    /// with their poses when known ([`InMemory`]). `origin` names the
+    /// source in messages.
     pub fn from_frames(
         frames: Vec<Frame>,
         poses: Option<Vec<Isometry3<f64>>>,
         origin: &str,
     ) -> Result<Self> {
-        if let Some(p) = &poses {
-            if p.len() != frames.len() {
-                return Err(crate::Error::Input(format!(
-                    "{origin}: {} poses for {} frames",
-                    p.len(),
-                    frames.len()
-                )));
-            }
-        }
-        let entries = frames
-            .iter()
-            .map(|f| FrameEntry {
-                path: Path::new(origin).join(format!("{}.ply", f.name)),
-                name: f.name.clone(),
-                stamp: f.stamp,
-            })
-            .collect();
-        Ok(Self {
-            entries,
-            poses,
-            store: FrameStore::Memory(frames),
-        })
+        Ok(Self::new(InMemory::new(frames, poses, origin)?))
     }
 
     /// Number of frames.
@@ -229,41 +228,52 @@ impl Sequence {
         self.entries.iter().map(|e| e.name.clone()).collect()
     }
 
-    /// The frames, when the sequence holds them in memory (`None` when
-    /// they are read from their files at every pass).
-    pub fn in_memory(&self) -> Option<&[Frame]> {
-        match &self.store {
-            FrameStore::Memory(frames) => Some(frames),
-            FrameStore::Files(_) => None,
+    /// The dataset the frames come from.
+    pub fn dataset(&self) -> &dyn Dataset {
+        self.dataset.as_ref()
+    }
+
+    /// The sensor model of the frames: the dataset's when it knows it
+    /// (the simulator), else the configuration's `sensor`.
+    pub fn sensor(&self, config: &crate::config::Config) -> Result<SensorModel> {
+        match self.dataset.sensor() {
+            Some(model) => Ok(model),
+            None => SensorModel::resolve(&config.sensor),
         }
     }
 
-    /// Frame `index`: lent from memory or the cache, or read from its file
-    /// (the error names the file).
+    /// The frames, when the dataset holds them all in memory (`None` when
+    /// they are read or made at every pass).
+    pub fn in_memory(&self) -> Option<&[Frame]> {
+        self.dataset.in_memory()
+    }
+
+    /// Frame `index`: lent from the dataset or the cache, or made by the
+    /// dataset (the error names the frame).
     pub fn frame(&self, index: usize) -> Result<Cow<'_, Frame>> {
         self.fetch(index).map(|(frame, _)| frame)
     }
 
-    /// Frame `index` and, when it was read from its file, the time that
-    /// took.
+    /// Frame `index` and, when the dataset made it (read its file), the
+    /// time that took.
     fn fetch(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
-        match &self.store {
-            FrameStore::Memory(frames) => Ok((Cow::Borrowed(&frames[index]), None)),
-            FrameStore::Files(cache) => {
-                if let Some(frame) = cache.frames[index].get() {
-                    return Ok((Cow::Borrowed(frame), None));
-                }
-                let start = Instant::now();
-                let frame = io::read_frame(&self.entries[index].path)?;
-                let read = start.elapsed();
-                let bytes = frame.points.len() * std::mem::size_of::<crate::cloud::Point>();
-                let frame = match cache.keep(&cache.frames[index], frame, bytes) {
-                    Ok(kept) => Cow::Borrowed(kept),
-                    Err(frame) => Cow::Owned(frame),
-                };
-                Ok((frame, Some(read)))
-            }
+        let cache = &self.cache;
+        if let Some(frame) = cache.frames[index].get() {
+            return Ok((Cow::Borrowed(frame), None));
         }
+        let start = Instant::now();
+        let frame = match self.dataset.frame(index)? {
+            // Held by the dataset: nothing to keep.
+            Cow::Borrowed(frame) => return Ok((Cow::Borrowed(frame), None)),
+            Cow::Owned(frame) => frame,
+        };
+        let read = start.elapsed();
+        let bytes = frame.points.len() * std::mem::size_of::<crate::cloud::Point>();
+        let frame = match cache.keep(&cache.frames[index], frame, bytes) {
+            Ok(kept) => Cow::Borrowed(kept),
+            Err(frame) => Cow::Owned(frame),
+        };
+        Ok((frame, Some(read)))
     }
 
     /// The organized scan of frame `index` (`frame`, as this sequence gave
@@ -275,10 +285,10 @@ impl Sequence {
         frame: &Frame,
         sensor: &SensorModel,
     ) -> Result<Cow<'_, OrganizedScan>> {
-        let cache = match &self.store {
-            FrameStore::Files(cache) if cache.frames[index].get().is_some() => cache,
-            _ => return OrganizedScan::build(frame, sensor).map(Cow::Owned),
-        };
+        let cache = &self.cache;
+        if cache.frames[index].get().is_none() {
+            return OrganizedScan::build(frame, sensor).map(Cow::Owned);
+        }
         let cell = &cache.scans[index];
         if let Some(scan) = cell.get() {
             return Ok(Cow::Borrowed(scan));

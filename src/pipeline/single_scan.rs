@@ -84,7 +84,7 @@ pub fn run_single_scan_into(
     sink: &mut dyn FrameSink,
 ) -> Result<RunOutput> {
     let wall = Instant::now();
-    let sensor = SensorModel::resolve(&config.sensor)?;
+    let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
     let classifier = single_scan_classifier(config);
     let mut timings = StageTimings::default();

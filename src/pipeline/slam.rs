@@ -18,7 +18,7 @@ use super::plane_optimized::run_plane_optimized_into;
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
 use super::single_scan::{check_dual_returns, check_points, organize_and_detect};
 use super::{FrameSink, PlaneOptimizedOutput, Sequence, StageTimings};
-use crate::backend::{backend, BackendParams, FactorGraph, SolveReport};
+use crate::backend::{backend, Backend, BackendParams, FactorGraph, SolveReport};
 use crate::cloud::Frame;
 use crate::config::Config;
 use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtractor};
@@ -120,7 +120,7 @@ pub fn track_sequence(
     origin: Option<Isometry3<f64>>,
 ) -> Result<Tracked> {
     let wall = Instant::now();
-    let sensor = SensorModel::resolve(&config.sensor)?;
+    let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
     let mut timings = StageTimings::default();
@@ -208,6 +208,24 @@ pub struct Tracked {
 /// not depend on the back-end unless a sliding window is configured, so
 /// back-ends can be compared on one tracking run by cloning it.
 pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput> {
+    let named = || backend(config.backend.name, &config.backend);
+    optimize_tracked_with(tracked, config, &named)
+}
+
+/// Makes the back-end a batch solve uses (one per solve; the solves between
+/// keyframes run in parallel). [`optimize_tracked`] makes the one named in
+/// `[backend] name`; any [`Backend`] can be passed, e.g. one defined
+/// outside this crate (`tests/custom_backend.rs`).
+pub type MakeBackend<'a> = dyn Fn() -> Result<Box<dyn Backend>> + Sync + 'a;
+
+/// [`optimize_tracked`] with the back-end that `make` makes instead of the
+/// configured one (the rest of `[backend]`, e.g. the plane factor, still
+/// applies).
+pub fn optimize_tracked_with(
+    tracked: Tracked,
+    config: &Config,
+    make: &MakeBackend<'_>,
+) -> Result<SlamOutput> {
     let Tracked {
         mut map,
         log,
@@ -219,9 +237,9 @@ pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput>
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
     let start = Instant::now();
     let graph = tracking_graph(&log, &map, &config.backend)?;
-    let (mut optimized, report) = optimize_batch(&graph, &mut map, &config.backend, &poses)?;
+    let (mut optimized, report) = optimize_batch(&graph, &mut map, make, &poses)?;
     if report.is_some() {
-        place_between_keyframes(&log, &map, &config.backend, &mut optimized)?;
+        place_between_keyframes(&log, &map, &config.backend, make, &mut optimized)?;
     }
     timings.add("backend", start.elapsed());
     Ok(SlamOutput {
@@ -237,19 +255,19 @@ pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput>
 }
 
 /// Optimise the graph of a tracking run ([`tracking_graph`]) with the
-/// configured back-end; the map's planes move to the result. Returns the
+/// back-end `make` makes; the map's planes move to the result. Returns the
 /// poses in frame order and the back-end's report (`None`, tracked poses
 /// unchanged, for fewer than two frames).
 pub fn optimize_batch(
     graph: &FactorGraph,
     map: &mut PlaneMap,
-    params: &BackendParams,
+    make: &MakeBackend<'_>,
     tracked: &[Isometry3<f64>],
 ) -> Result<(Vec<Isometry3<f64>>, Option<SolveReport>)> {
     if tracked.len() < 2 {
         return Ok((tracked.to_vec(), None));
     }
-    let solver = backend(params.name, params)?;
+    let solver = make()?;
     let (values, report) = solver.optimize(graph, &graph.values)?;
     tracing::info!(
         backend = solver.name(),
@@ -271,6 +289,7 @@ pub fn place_between_keyframes(
     log: &TrackingLog,
     map: &PlaneMap,
     params: &BackendParams,
+    make: &MakeBackend<'_>,
     poses: &mut [Isometry3<f64>],
 ) -> Result<()> {
     let n = log.frames.len().min(poses.len());
@@ -293,7 +312,7 @@ pub fn place_between_keyframes(
         .par_iter()
         .map(|(span, closed)| {
             let graph = segment_graph(log, span.clone(), *closed, initial, map, params)?;
-            let solver = backend(params.name, params)?;
+            let solver = make()?;
             let (values, _) = solver.optimize(&graph, &graph.values)?;
             Ok(span
                 .clone()

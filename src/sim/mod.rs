@@ -17,6 +17,7 @@
 //! | [`truth`] | ground-truth reflective planes (`planes.json`) |
 //! | [`stats`] | label shares of a sequence |
 //! | [`builtin`] | the scenes of `datasets/scenes/`, embedded |
+//! | [`dataset`] | the simulator as a [`Dataset`](crate::io::Dataset), frames made on demand |
 //!
 //! The physics follows the paper's "Sensor Modeling" section: at glass a
 //! beam produces a surface echo that is strong only near normal incidence, a
@@ -38,6 +39,7 @@
 //! ```
 
 pub mod builtin;
+pub mod dataset;
 pub mod echo;
 pub mod material;
 pub mod raycast;
@@ -51,6 +53,7 @@ pub mod truth;
 
 use rayon::prelude::*;
 
+pub use dataset::SimDataset;
 pub use echo::{label, Echo};
 pub use material::{Material, MaterialKind};
 pub use scene::Scene;

@@ -6,7 +6,7 @@
 //! | [`mcap::write_run_mcap`] | `run.mcap`: classified clouds, planes, poses (Foxglove) |
 //! | [`topdown`] | `topdown.png`: the classified map from above, a height slice |
 //! | [`plots`] | `trajectory.png` (estimate and ground truth), `metrics.png` |
-//! | [`corner`] | the around-the-corner figure of `specular reproduce` |
+//! | [`corner`] | the around-the-corner figure (of `specular-reproduce`) |
 //! | [`report`] | `report.md` |
 
 pub mod corner;

@@ -5,14 +5,14 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::config::Config;
-use crate::pipeline::{Sequence, StageTimings};
 use nalgebra::Isometry3;
 use rayon::prelude::*;
+use specular::config::Config;
+use specular::pipeline::{Sequence, StageTimings};
 
-use crate::cloud::Frame;
-use crate::sim::{self, LabelCounts, Scene, SimFrame, Simulator};
-use crate::{Error, Result};
+use specular::cloud::Frame;
+use specular::sim::{self, LabelCounts, Scene, SimFrame, Simulator};
+use specular::{Error, Result};
 
 /// Where a dataset comes from.
 #[derive(Debug, Clone, PartialEq)]

@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 use super::published::{self, ORIGINAL_CODE_MS, ORIGINAL_CODE_TEN_FRAMES};
 use super::timing::TimingReport;
 use super::{OdometryOutcome, Results};
-use crate::classify::Class;
-use crate::eval::{Metrics, TrajectoryError};
+use specular::classify::Class;
+use specular::eval::{Metrics, TrajectoryError};
 
 /// The real dataset compared with the original code's figures.
 pub const TEN_FRAMES: &str = "3dref-seq1-demo";

@@ -7,13 +7,13 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::classify::Class;
-use crate::config::Config;
-use crate::io::MapPoint;
-use crate::pipeline::plane_optimized::{around_corner_map, measured_map};
-use crate::pipeline::{PlaneOptimizedOutput, Sequence};
-use crate::viz::corner::around_corner_png;
-use crate::Result;
+use specular::classify::Class;
+use specular::config::Config;
+use specular::io::MapPoint;
+use specular::pipeline::plane_optimized::{around_corner_map, measured_map};
+use specular::pipeline::{PlaneOptimizedOutput, Sequence};
+use specular::viz::corner::around_corner_png;
+use specular::Result;
 
 /// Half-height of the slab drawn, metres around the mean sensor height.
 const SLAB: f64 = 0.8;

@@ -1,26 +1,30 @@
-//! `specular reproduce`: the paper's experiments, side by side with its
-//! published tables (see [`specular::reproduce`]). Writes `results.json`,
+//! `specular-reproduce`: the paper's experiments, side by side with its
+//! published tables (see the [`specular_paper`] library). Writes `results.json`,
 //! `tables.md`, `timings.json`, `timings.md` and `around_corner.png` into
 //! `--out`, and fills the generated blocks of the README beside it (from
 //! the template `paper/README.in.md` when it does not exist yet).
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use clap::Args;
-use specular::reproduce::{
-    self, data::resolve_real, readme, tables, timing, KissIcp, Options, Source, SCENES,
+use clap::Parser;
+use specular_paper::{
+    self as reproduce, data::resolve_real, readme, tables, timing, KissIcp, Options, Source, SCENES,
 };
 
-use super::bundled_sample;
+#[cfg(feature = "mimalloc")]
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 /// The README template: hand-written text around the generated blocks
 /// (used when the README does not exist yet).
-const README_TEMPLATE: &str = include_str!("../../paper/README.in.md");
+const README_TEMPLATE: &str = include_str!("../../README.in.md");
 
-/// Arguments of `reproduce`.
-#[derive(Args, Debug)]
+/// Reproduce the paper's experiments beside its published tables.
+#[derive(Parser, Debug)]
+#[command(name = "specular-reproduce", version, about, long_about = None)]
 pub struct ReproduceArgs {
     /// Output directory of the results (tables, JSON, figures); the README
     /// goes beside it. A fresh directory by default: the tracked
@@ -43,13 +47,29 @@ pub struct ReproduceArgs {
     /// Where to write the README (default: the parent of --out).
     #[arg(long)]
     pub readme: Option<PathBuf>,
+    /// No progress bars (they are also hidden when stderr is not a terminal).
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Log to stderr: -v info, -vv debug (RUST_LOG overrides).
+    #[arg(short, long, action = clap::ArgAction::Count)]
+    pub verbose: u8,
 }
 
 /// The ten shared real frames, when `../shared/data` exists beside the
 /// repository (it does in CI).
 fn shared_frames() -> Option<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/3dref-seq1-demo");
+    let dir = repository().join("../shared/data/3dref-seq1-demo");
     dir.is_dir().then_some(dir)
+}
+
+/// The repository's root (this crate is `paper/reproduce/` in it).
+fn repository() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+/// The repository's bundled real sample.
+fn bundled_sample() -> PathBuf {
+    repository().join("datasets/3dref-sample")
 }
 
 /// The real directories in table order: the bundled sample, the shared ten
@@ -78,7 +98,7 @@ fn real_dirs(args: &ReproduceArgs) -> Result<Vec<PathBuf>> {
 
 /// The command line, as reproducible text (global flags left out).
 fn command_line(args: &ReproduceArgs) -> String {
-    let mut s = format!("specular reproduce --out {}", args.out.display());
+    let mut s = format!("specular-reproduce --out {}", args.out.display());
     for d in &args.data {
         s.push_str(&format!(" --data {}", d.display()));
     }
@@ -91,8 +111,38 @@ fn command_line(args: &ReproduceArgs) -> String {
     s
 }
 
-/// Run `reproduce`.
-pub fn run(args: ReproduceArgs) -> Result<()> {
+fn main() -> std::process::ExitCode {
+    let args = ReproduceArgs::parse();
+    init_logging(args.verbose);
+    specular::progress::set_enabled(!args.quiet && std::io::stderr().is_terminal());
+    match run(args) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+/// `tracing` logs on stderr, as the `specular` command does: warnings by
+/// default, `-v` info, `-vv` debug; a `RUST_LOG` filter takes precedence.
+fn init_logging(verbose: u8) {
+    let level = match verbose {
+        0 => "warn",
+        1 => "info",
+        _ => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
+        .try_init();
+}
+
+/// Run the reproduction.
+fn run(args: ReproduceArgs) -> Result<()> {
     let started = Instant::now();
     let dirs = real_dirs(&args)?;
     let timing_dir = shared_frames().unwrap_or_else(bundled_sample);

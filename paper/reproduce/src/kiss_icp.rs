@@ -1,7 +1,7 @@
 //! KISS-ICP (Vizzo et al., RA-L 2023), the external LiDAR odometry peer of
 //! the trajectory comparison: its pip package runs in a private venv on the
 //! first returns of each sequence, and its poses are scored with our own
-//! [`trajectory_error`](crate::eval::trajectory_error), as the SLAM poses
+//! [`trajectory_error`](specular::eval::trajectory_error), as the SLAM poses
 //! are.
 //!
 //! The work happens in `<out>/.kiss-icp/` (ignored by git): the venv, the
@@ -16,14 +16,14 @@ use std::io::Write;
 
 use rayon::prelude::*;
 
-use crate::io::write_atomic;
-use crate::pipeline::Sequence;
-use crate::{Error, Result};
+use specular::io::write_atomic;
+use specular::pipeline::Sequence;
+use specular::{Error, Result};
 
 /// The KISS-ICP version installed (pinned for reproducibility).
 pub const VERSION: &str = "1.3.0";
 /// The script that installs and runs it.
-pub const SCRIPT: &str = include_str!("../../paper/kiss_icp.sh");
+pub const SCRIPT: &str = include_str!("../../kiss_icp.sh");
 /// KISS-ICP's configuration: the 3DRef crop as maximum range (its voxel
 /// size follows as 1/100 of it), no deskewing (the simulated sweeps have
 /// no motion distortion) and one thread, so its result is repeatable.

@@ -12,9 +12,9 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use super::data::resolve_real;
-use crate::config::{Config, Method};
-use crate::pipeline::{run_plane_optimized, run_single_scan, Sequence, StageTimings};
-use crate::{Error, Result};
+use specular::config::{Config, Method};
+use specular::pipeline::{run_plane_optimized, run_single_scan, Sequence, StageTimings};
+use specular::{Error, Result};
 
 /// One (method, thread count) measurement.
 #[derive(Debug, Clone, PartialEq, Serialize)]

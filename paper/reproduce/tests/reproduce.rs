@@ -1,18 +1,17 @@
-//! `specular reproduce`: a quick run writes every table, JSON and figure,
+//! `specular-reproduce`: a quick run writes every table, JSON and figure,
 //! gives the same deterministic files twice, and refuses a bad `--data`.
 
 use std::path::Path;
 use std::process::{Command, Output};
 
 use specular::config::Config;
-use specular::reproduce::{slam_backends, with_backend};
+use specular_paper::{slam_backends, with_backend};
 
 fn reproduce(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specular"))
-        .arg("reproduce")
+    Command::new(env!("CARGO_BIN_EXE_specular-reproduce"))
         .args(args)
         .output()
-        .expect("run specular")
+        .expect("run specular-reproduce")
 }
 
 fn read(path: &Path) -> Vec<u8> {
@@ -188,11 +187,11 @@ fn backends_are_applied_by_name() {
 #[test]
 fn by_default_a_run_writes_a_fresh_directory_not_paper() {
     let tmp = tempfile::tempdir().unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_specular"))
+    let o = Command::new(env!("CARGO_BIN_EXE_specular-reproduce"))
         .current_dir(tmp.path())
-        .args(["reproduce", "--quick"])
+        .arg("--quick")
         .output()
-        .expect("run specular");
+        .expect("run specular-reproduce");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(tmp
         .path()

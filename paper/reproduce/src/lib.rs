@@ -1,6 +1,12 @@
 //! Reproduction of the paper's experiments ("Detection and Utilization of
 //! Reflections in LiDAR Scans Through Plane Optimization and Plane SLAM"),
-//! side by side with its published tables: `specular reproduce`.
+//! side by side with its published tables: the `specular-reproduce`
+//! command (`cargo run --release -p specular-paper -- --out DIR`).
+//!
+//! This crate sits beside the `specular` library, not in it: the library a
+//! user links holds the method; the paper's tables, published values,
+//! figures, the KISS-ICP driver and the README filling live here and use
+//! the library through its public API only.
 //!
 //! For every dataset (real 3DRef directories and the simulator's benchmark
 //! scenes, simulated in memory with their true poses) it runs
@@ -33,14 +39,15 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use crate::config::{Config, Method};
-use crate::eval::{trajectory_error, Metrics, TrajectoryError};
-use crate::io::write_atomic;
-use crate::pipeline::slam::classify_with_poses;
-use crate::pipeline::{
+use specular::backend::{backend, BackendName, BackendParams};
+use specular::config::{Config, Method};
+use specular::eval::{trajectory_error, Metrics, TrajectoryError};
+use specular::io::write_atomic;
+use specular::pipeline::slam::classify_with_poses;
+use specular::pipeline::{
     optimize_tracked, run_plane_optimized, run_single_scan, run_slam, track_sequence, Discard,
 };
-use crate::{Error, Result};
+use specular::{Error, Result};
 
 pub use data::{DataKind, Dataset, Source};
 pub use kiss_icp::KissIcp;
@@ -55,13 +62,19 @@ pub const CORNER_SCENE: &str = "mirror-room";
 pub const CORNER_PNG: &str = "around_corner.png";
 
 /// The back-ends the Reflection SLAM comparison loops over: every one
-/// this build has (`factrs` only with its cargo feature).
+/// this build of the library has (`factrs` only with its cargo feature).
 pub fn slam_backends() -> Vec<String> {
-    let mut names = vec!["average", "gn", "lm"];
-    if cfg!(feature = "factrs") {
-        names.push("factrs");
-    }
-    names.into_iter().map(String::from).collect()
+    let params = BackendParams::default();
+    [
+        BackendName::Average,
+        BackendName::Gn,
+        BackendName::Lm,
+        BackendName::Factrs,
+    ]
+    .into_iter()
+    .filter(|&name| backend(name, &params).is_ok())
+    .map(|name| name.as_str().to_string())
+    .collect()
 }
 
 /// `config` with its SLAM back-end set to `name` (one of
