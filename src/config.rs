@@ -255,7 +255,10 @@ const EXTENDS: &str = "extends";
 /// Tables whose tag key selects a variant with its own keys (an internally
 /// tagged enum): a file that changes the tag replaces the whole table instead
 /// of merging into it, so the other variant's keys are not carried over.
-const TAGGED_TABLES: &[(&str, &str)] = &[("backend.robust", "kind")];
+const TAGGED_TABLES: &[(&str, &str)] = &[
+    ("backend.robust", "kind"),
+    ("slam.loop_closure.robust", "kind"),
+];
 
 /// How a configuration file was layered: the built-in under it and the keys
 /// it set, so a user can see what a file changes (`specular config`).
@@ -516,6 +519,7 @@ impl Config {
                     .into(),
             );
         }
+        self.slam.loop_closure.validate()?;
         self.backend.validate().map_err(|e| e.to_string())?;
         Ok(())
     }

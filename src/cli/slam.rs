@@ -116,12 +116,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .collect();
     io::write_planes(&out.join("planes.json"), &records)?;
     let mut csv = String::from(
-        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms,interval,gap,jump,turn_deg,implausible_motion,recovered_yaw_deg\n",
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms,interval,gap,jump,turn_deg,implausible_motion,recovered_yaw_deg,loop_candidates,loop_with,loop_correction,loop_resolved\n",
     );
     for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
         writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3},{},{},{:.4},{:.2},{},{}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3},{},{},{:.4},{:.2},{},{},{},{},{},{}",
             names[r.index],
             r.planes,
             r.frame_matches,
@@ -151,6 +151,16 @@ pub fn run(args: SlamArgs) -> Result<()> {
             r.recovered_yaw_deg
                 .map(|y| format!("{y:.1}"))
                 .unwrap_or_default(),
+            r.loop_candidates,
+            r.loop_closure
+                .as_ref()
+                .map(|l| names[l.with].clone())
+                .unwrap_or_default(),
+            r.loop_closure
+                .as_ref()
+                .map(|l| format!("{:.4}", l.check.correction))
+                .unwrap_or_default(),
+            r.loop_closure.as_ref().is_some_and(|l| l.resolved),
         )?;
     }
     io::write_atomic(&out.join("frames.csv"), |w| {
@@ -182,6 +192,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
     let degenerate = slam.reports.iter().filter(|r| r.is_degenerate()).count();
     let fallback = slam.reports.iter().filter(|r| r.fallback).count();
     let input = InputReport::new(&slam.reports, &names);
+    let loops = LoopSummary::new(&slam.reports, &names, slam.merged_at_end);
     let total: f64 = slam.frame_times.iter().map(|d| d.as_secs_f64()).sum();
     let fps = slam.reports.len() as f64 / total.max(1e-12);
 
@@ -216,6 +227,10 @@ pub fn run(args: SlamArgs) -> Result<()> {
         "implausible_motion": input.implausible,
         "recovered_frames": input.recovered.len(),
         "recovered": input.recovered,
+        "loop_closures": loops.entries,
+        "loop_closure_count": loops.entries.len(),
+        "loop_candidates_verified": loops.verified,
+        "merged_landmarks": loops.merged,
         "landmarks": slam.map.landmarks.len(),
         "specular": specular::provenance(),
         "frames_per_cpu_second": fps,
@@ -254,6 +269,9 @@ pub fn run(args: SlamArgs) -> Result<()> {
     for line in input.lines() {
         println!("{line}");
     }
+    if config.slam.loop_closure.enabled {
+        println!("{}", loops.line());
+    }
     if let Some(r) = &slam.backend {
         println!(
             "back-end {}: cost {:.6e} -> {:.6e} in {} iterations, {:.1} ms",
@@ -286,6 +304,87 @@ pub fn run(args: SlamArgs) -> Result<()> {
         print!("{}", t.table());
     }
     dir.finish()
+}
+
+/// The loop closures of a run, for `metrics.json` and the summary.
+struct LoopSummary {
+    /// One object per closed loop: frame, name, the frame it closes with,
+    /// inliers, smallest eigenvalue, correction, whether it re-solved.
+    entries: Vec<serde_json::Value>,
+    /// Candidates verified over the run (accepted or not).
+    verified: usize,
+    /// Duplicate landmarks merged (at the closures and before the final
+    /// batch).
+    merged: usize,
+}
+
+impl LoopSummary {
+    fn new(
+        reports: &[specular::slam::FrameReport],
+        names: &[String],
+        merged_at_end: usize,
+    ) -> Self {
+        let entries = reports
+            .iter()
+            .filter_map(|r| r.loop_closure.as_ref().map(|l| (r, l)))
+            .map(|(r, l)| {
+                json!({
+                    "frame": r.index,
+                    "name": names[r.index],
+                    "with": l.with,
+                    "with_name": names[l.with],
+                    "matches": l.check.matches,
+                    "inliers": l.check.inliers,
+                    "min_eigenvalue": l.check.min_eigenvalue,
+                    "correction": l.check.correction,
+                    "correction_deg": l.check.correction_deg,
+                    "resolved": l.resolved,
+                    "merged_landmarks": l.merged,
+                })
+            })
+            .collect();
+        let merged = reports
+            .iter()
+            .filter_map(|r| r.loop_closure.as_ref())
+            .map(|l| l.merged)
+            .sum::<usize>()
+            + merged_at_end;
+        Self {
+            entries,
+            verified: reports.iter().map(|r| r.loop_candidates).sum(),
+            merged,
+        }
+    }
+
+    /// One summary line.
+    fn line(&self) -> String {
+        let resolved = self
+            .entries
+            .iter()
+            .filter(|e| e["resolved"].as_bool() == Some(true))
+            .count();
+        let first = self
+            .entries
+            .first()
+            .map(|e| {
+                format!(
+                    " (first at frame {} with frame {}, correction {:.3} m)",
+                    e["name"].as_str().unwrap_or_default(),
+                    e["with_name"].as_str().unwrap_or_default(),
+                    e["correction"].as_f64().unwrap_or(f64::NAN)
+                )
+            })
+            .unwrap_or_default();
+        format!(
+            "loop closure: {} loop{} closed of {} candidates verified{first}, {resolved} re-solve{} during tracking, {} duplicate landmark{} merged",
+            self.entries.len(),
+            if self.entries.len() == 1 { "" } else { "s" },
+            self.verified,
+            if resolved == 1 { "" } else { "s" },
+            self.merged,
+            if self.merged == 1 { "" } else { "s" },
+        )
+    }
 }
 
 /// `OUT/trajectory.png`: the back-end's poses and tracking's alone, over the

@@ -26,7 +26,8 @@ use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
-use crate::slam::{FrameReport, PointParams, ScanSamples, Tracker, TrackingLog};
+use crate::slam::loop_closure::merge_duplicates;
+use crate::slam::{FrameReport, LoopConstraint, PointParams, ScanSamples, Tracker, TrackingLog};
 use crate::Result;
 use rayon::prelude::*;
 
@@ -46,6 +47,11 @@ pub struct SlamOutput {
     pub map: PlaneMap,
     /// One report per frame.
     pub reports: Vec<FrameReport>,
+    /// The verified loop closures (the back-end's loop factors).
+    pub loops: Vec<LoopConstraint>,
+    /// Duplicate landmarks merged before the final batch (merges at the
+    /// loop closures themselves are in the frames' reports).
+    pub merged_at_end: usize,
     /// Processing time per frame: front end plus tracking (CPU time).
     pub frame_times: Vec<Duration>,
     /// Time per stage.
@@ -159,8 +165,14 @@ pub fn track_sequence(
             second_returns += frame.second_returns();
             let start = Instant::now();
             let seed = frame_seed(config.seed ^ 0x51a4, &frame.name);
-            let report =
-                tracker.track_with_samples(features.planes, features.samples.as_ref(), seed);
+            // The frame's own stamp (not only its samples'): timing and
+            // gaps work with the point term off too.
+            let report = tracker.track_at(
+                Some(frame.stamp),
+                features.planes,
+                features.samples.as_ref(),
+                seed,
+            );
             let track = start.elapsed();
             timings.add("track", track);
             frame_times.push(t.stages.iter().map(|(_, d)| *d).sum::<Duration>() + track);
@@ -228,7 +240,7 @@ pub fn optimize_tracked_with(
 ) -> Result<SlamOutput> {
     let Tracked {
         mut map,
-        log,
+        mut log,
         reports,
         frame_times,
         mut timings,
@@ -236,6 +248,15 @@ pub fn optimize_tracked_with(
     // Tracking's poses as the sliding window left them.
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
     let start = Instant::now();
+    // After a loop closure the same plane may still be two landmarks
+    // (mapped twice after the last re-solve): one again before the batch.
+    let merged = if log.loops.is_empty() {
+        0
+    } else {
+        merge_duplicates(&mut map, &mut log, &config.slam.loop_closure)
+            .merged
+            .len()
+    };
     let graph = tracking_graph(&log, &map, &config.backend)?;
     let (mut optimized, report) = optimize_batch(&graph, &mut map, make, &poses)?;
     if report.is_some() {
@@ -249,6 +270,8 @@ pub fn optimize_tracked_with(
         graph,
         map,
         reports,
+        loops: log.loops,
+        merged_at_end: merged,
         frame_times,
         timings,
     })

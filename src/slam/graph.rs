@@ -17,6 +17,9 @@
 //!   knowledge, which frame-to-frame odometry alone does not carry (in a
 //!   corridor the planes give no position along it; odometry drifts there
 //!   by its per-frame noise, the point map does not);
+//! - one relative-pose factor per verified loop closure whose two frames
+//!   are poses of the graph (the measured `T_from_to`, under the loop's
+//!   robust kernel; [`crate::slam::loop_closure`]);
 //! - one plane factor per logged observation (plane-to-plane or the
 //!   point-to-plane scatter factor, per [`BackendParams::plane_factor`]),
 //!   with the configured robust kernel; an observation whose points lie
@@ -181,6 +184,20 @@ fn graph_of(
         graph.add(AnyFactor::Between(Between::new(
             a as u32, b as u32, measured, info,
         )));
+    }
+    // Loop closures whose two frames are poses of this graph.
+    for l in &log.loops {
+        if frames.binary_search(&l.from).is_ok() && frames.binary_search(&l.to).is_ok() {
+            let factor = AnyFactor::Between(Between::new(
+                l.from as u32,
+                l.to as u32,
+                l.relative,
+                l.sqrt_info,
+            ));
+            graph
+                .factors
+                .push(GraphFactor::new(factor).with_robust(l.robust));
+        }
     }
     if params.point_anchor_translation_sigma > 0.0 && params.point_anchor_rotation_sigma > 0.0 {
         for &k in frames {
@@ -374,6 +391,7 @@ mod tests {
         TrackingLog {
             frames,
             observations: Vec::new(),
+            loops: Vec::new(),
         }
     }
 

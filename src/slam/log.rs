@@ -83,4 +83,6 @@ pub struct TrackingLog {
     pub frames: Vec<TrackedFrame>,
     /// Every plane observation, in frame order.
     pub observations: Vec<LandmarkObservation>,
+    /// Verified loop closures, in the order they were found.
+    pub loops: Vec<super::loop_closure::LoopConstraint>,
 }

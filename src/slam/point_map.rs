@@ -205,6 +205,28 @@ impl LocalPointMap {
         }
     }
 
+    /// Move every point by the correction of the frame that added it
+    /// (`correction(frame)`, world to world; `None`: leave it), after a
+    /// back-end moved the poses (a loop closure). Points are re-binned.
+    pub fn correct(&mut self, correction: impl Fn(usize) -> Option<Isometry3<f64>>) {
+        let old = std::mem::take(&mut self.voxels);
+        // Re-binned in a fixed order: deterministic voxel contents.
+        let mut points: Vec<(Point3<f64>, usize)> = old.into_values().flatten().collect();
+        points.sort_by(|a, b| {
+            a.1.cmp(&b.1)
+                .then(a.0.x.total_cmp(&b.0.x))
+                .then(a.0.y.total_cmp(&b.0.y))
+                .then(a.0.z.total_cmp(&b.0.z))
+        });
+        for (p, frame) in points {
+            let q = correction(frame).map_or(p, |c| c * p);
+            let cell = self.voxels.entry(voxel_key(&q, self.voxel)).or_default();
+            if cell.len() < self.max_per_voxel {
+                cell.push((q, frame));
+            }
+        }
+    }
+
     /// Forget the voxels whose first point lies farther than `radius` from
     /// `centre`.
     pub fn forget_beyond(&mut self, centre: &Point3<f64>, radius: f64) {

@@ -6,8 +6,12 @@ use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
 use super::clock::{FrameClock, FrameTiming};
-use super::graph::{update_map, window_graph};
+use super::graph::{optimized_poses, tracking_graph, update_map, window_graph};
 use super::log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
+use super::loop_closure::{
+    merge_duplicates, LoopClosureParams, LoopConstraint, LoopDetector, LoopMatch, Pair, Samples,
+    Verifier,
+};
 use super::motion::{MotionModel, MotionParams, MotionUpdate};
 use super::point_map::{LocalPointMap, PointParams, ScanSamples};
 use super::recovery::{recover_heading, RecoveryParams, RegistrationContext};
@@ -18,7 +22,7 @@ use crate::map::{MapMerger, PlaneMap};
 use crate::reflect::BoundedPlane;
 use crate::registration::{
     match_planes, refine_free_directions, register, Degeneracy, GaussNewtonParams, MatchCriteria,
-    MismatchRejector, PointRefineParams, RejectorParams,
+    MismatchRejector, PointRefineParams, RejectorParams, SurfaceSample,
 };
 
 /// Reflection SLAM settings (`[slam]`).
@@ -70,6 +74,9 @@ pub struct SlamParams {
     /// interval after the previous one follows a gap (frames missing),
     /// reported per frame (0: never).
     pub gap_ratio: f64,
+    /// Loop closure: recognise revisits, verify them, add loop factors
+    /// and re-solve ([`super::loop_closure`]).
+    pub loop_closure: LoopClosureParams,
 }
 
 impl FrameReport {
@@ -104,6 +111,7 @@ impl Default for SlamParams {
             keyframe_move: 0.0,
             keyframe_turn_deg: 0.0,
             gap_ratio: 1.5,
+            loop_closure: LoopClosureParams::default(),
         }
     }
 }
@@ -151,6 +159,25 @@ pub struct FrameReport {
     /// How far the tracked pose departs from the motion model's
     /// prediction, as accelerations; `implausible` when beyond its bounds.
     pub motion: MotionUpdate,
+    /// Loop candidates verified at this frame (accepted or not).
+    pub loop_candidates: usize,
+    /// The loop closed at this frame, if any.
+    pub loop_closure: Option<LoopReport>,
+}
+
+/// A loop closed at a frame (a row of `frames.csv`, an entry of
+/// `metrics.json`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopReport {
+    /// The earlier frame the loop closes with.
+    pub with: usize,
+    /// What the verification found.
+    pub check: LoopMatch,
+    /// The whole graph was re-solved at this frame (the loop moved the
+    /// estimate by more than `resolve_correction`).
+    pub resolved: bool,
+    /// Duplicate landmarks merged after the re-solve.
+    pub merged: usize,
 }
 
 /// Scan-to-map tracking over a sequence of frames' planes.
@@ -178,6 +205,11 @@ pub struct Tracker {
     clock: FrameClock,
     /// Earlier frames' surface samples around the sensor.
     points: LocalPointMap,
+    /// The loop-closure keyframe database.
+    loops: LoopDetector,
+    /// The current frame's surface samples without reflections (sensor
+    /// frame), for the loop-closure database.
+    clean_samples: Vec<SurfaceSample>,
 }
 
 impl Tracker {
@@ -203,6 +235,8 @@ impl Tracker {
             last_keyframe: None,
             clock: FrameClock::new(params.gap_ratio),
             points: LocalPointMap::new(params.points.map_voxel, params.points.max_points_per_voxel),
+            loops: LoopDetector::new(),
+            clean_samples: Vec::new(),
         }
     }
 
@@ -295,6 +329,8 @@ impl Tracker {
             stamp,
             timing,
             motion: MotionUpdate::default(),
+            loop_candidates: 0,
+            loop_closure: None,
         };
 
         // 1. Predict (the first frame defines the world frame).
@@ -430,6 +466,11 @@ impl Tracker {
         report.motion = self.motion.update(pose, dt);
         self.previous = Some((usable, pose));
         report.pose = pose;
+        if p.loop_closure.enabled {
+            if let Some(corrected) = self.close_loop(index, pose, seed, &mut report) {
+                report.pose = corrected;
+            }
+        }
         if p.window >= 2 && p.window_every >= 1 && (index + 1).is_multiple_of(p.window_every) {
             if let Some(corrected) = self.optimize_window(index) {
                 report.pose = corrected;
@@ -475,6 +516,169 @@ impl Tracker {
             *previous = pose;
         }
         Some(pose)
+    }
+
+    /// Look for a loop at frame `index` (tracked at `pose`, its planes the
+    /// previous frame's now): when it is a loop keyframe, verify the
+    /// candidates, log the first verified loop, and when that moves the
+    /// estimate by more than `resolve_correction`, re-solve the whole
+    /// graph ([`resolve_all`](Self::resolve_all)). Returns the corrected
+    /// pose of frame `index` when it moved.
+    fn close_loop(
+        &mut self,
+        index: usize,
+        pose: Isometry3<f64>,
+        seed: u64,
+        report: &mut FrameReport,
+    ) -> Option<Isometry3<f64>> {
+        let lc = self.params.loop_closure;
+        let before = index
+            .checked_sub(1)
+            .and_then(|k| self.log.frames.get(k))
+            .map(|f| f.pose);
+        if !self.loops.advance(index, &pose, before.as_ref(), &lc) {
+            return None;
+        }
+        let planes: Vec<FramePlane> = self
+            .previous
+            .as_ref()
+            .map(|(planes, _)| planes.clone())
+            .unwrap_or_default();
+        let frames = &self.log.frames;
+        let candidates = self.loops.candidates(
+            index,
+            &planes,
+            &pose,
+            |k| frames.get(k).map(|f| f.pose),
+            &lc,
+        );
+        let pp = self.params.points;
+        let verifier = Verifier {
+            rejector: self.rejector.as_ref(),
+            gauss_newton: &self.params.gauss_newton,
+            inlier_cos: self.params.rejector.inlier_cos(),
+            inlier_offset: self.params.rejector.inlier_offset,
+            points: pp.enabled.then_some((
+                PointRefineParams {
+                    max_correspondence: pp.max_correspondence,
+                    kernel_scale: pp.kernel_scale,
+                    max_iterations: pp.max_iterations,
+                    min_information: pp.min_information,
+                },
+                pp.map_voxel,
+                pp.max_points_per_voxel,
+            )),
+        };
+        let mut found = None;
+        for c in &candidates {
+            report.loop_candidates += 1;
+            let prior = frames[c.frame].pose.inverse() * pose;
+            let submap = self.loops.submap(c.frame, lc.submap_keyframes, |k| {
+                frames.get(k).map(|f| f.pose)
+            });
+            let samples = Samples {
+                current: &self.clean_samples,
+                candidate: &submap,
+                candidate_frame: c.frame,
+            };
+            let pair = Pair {
+                current: &planes,
+                candidate: c.planes,
+                travelled: self.loops.path_between(c.frame, index),
+                samples: Some(samples),
+            };
+            match verifier.verify(&pair, &prior, &lc, seed ^ (c.frame as u64)) {
+                Ok(m) => {
+                    found = Some((c.frame, m));
+                    break;
+                }
+                Err(why) => {
+                    tracing::debug!(frame = index, candidate = c.frame, ?why, "loop rejected")
+                }
+            }
+        }
+        self.loops
+            .insert(index, &planes, &self.clean_samples, &pose);
+        let (from, check) = found?;
+        tracing::debug!(frame = index, with = from, ?check, "loop closed");
+        for k in [from, index] {
+            if let Some(f) = self.log.frames.get_mut(k) {
+                f.keyframe = true;
+            }
+        }
+        self.log.loops.push(LoopConstraint {
+            from,
+            to: index,
+            relative: check.relative,
+            sqrt_info: lc.sqrt_info(),
+            robust: lc.robust,
+            check: check.clone(),
+        });
+        let resolve = check.correction > lc.resolve_correction;
+        let mut out = LoopReport {
+            with: from,
+            check,
+            resolved: false,
+            merged: 0,
+        };
+        let corrected = if resolve {
+            self.resolve_all(index).map(|(pose, merged)| {
+                out.resolved = true;
+                out.merged = merged;
+                pose
+            })
+        } else {
+            None
+        };
+        report.loop_closure = Some(out);
+        corrected
+    }
+
+    /// Optimise the whole graph so far (with its loop factors) with the
+    /// back-end; every logged pose, the landmarks (planes and boundaries,
+    /// each with the correction of the last frame that saw it), the local
+    /// point map (each point with its frame's correction), the motion model
+    /// and the previous pose take the result; then duplicate landmarks are
+    /// merged. Returns frame `index`'s new pose and the number of merges;
+    /// `None` (nothing changed) without a back-end or when it fails.
+    fn resolve_all(&mut self, index: usize) -> Option<(Isometry3<f64>, usize)> {
+        let (solver, params) = self.window.as_ref()?;
+        let graph = tracking_graph(&self.log, &self.map, params).ok()?;
+        let values = match solver.optimize(&graph, &graph.values) {
+            Ok((values, _)) => values,
+            Err(e) => {
+                tracing::debug!(frame = index, "loop re-solve failed: {e}");
+                return None;
+            }
+        };
+        let old: Vec<Isometry3<f64>> = self.log.frames.iter().map(|f| f.pose).collect();
+        let new = optimized_poses(&values, &old);
+        let corrections: Vec<Isometry3<f64>> =
+            old.iter().zip(&new).map(|(o, n)| n * o.inverse()).collect();
+        for (f, p) in self.log.frames.iter_mut().zip(&new) {
+            f.pose = *p;
+        }
+        for l in &mut self.map.landmarks {
+            if let Some(c) = corrections.get(l.last_frame) {
+                l.plane = l.plane.transformed(c);
+                for v in &mut l.boundary {
+                    *v = c * *v;
+                }
+            }
+        }
+        update_map(&mut self.map, &values);
+        self.points.correct(|k| corrections.get(k).copied());
+        let merged = merge_duplicates(&mut self.map, &mut self.log, &self.params.loop_closure);
+        let pose = *new.get(index)?;
+        self.motion.correct(pose);
+        if let Some((_, previous)) = &mut self.previous {
+            *previous = pose;
+        }
+        if let Some(last) = &mut self.last_keyframe {
+            *last = corrections.get(index).map_or(*last, |c| c * *last);
+        }
+        self.loops.correct_last(&pose);
+        Some((pose, merged.merged.len()))
     }
 
     /// Refine the directions of `pose` that the planes left free (per
@@ -527,6 +731,9 @@ impl Tracker {
             });
         }
         self.points.insert(&clean, &pose, index);
+        if self.params.loop_closure.enabled {
+            self.clean_samples = clean;
+        }
         self.points
             .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
         (pose, anchor)

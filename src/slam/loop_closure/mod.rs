@@ -1,0 +1,407 @@
+//! Loop closure: recognise a revisit, verify it, and hand the back-end a
+//! loop factor (issue 15, item 3).
+//!
+//! 1. **Keyframe database.** Whenever the sensor has moved `keyframe_move`
+//!    metres or turned `keyframe_turn_deg` since the last entry, the
+//!    frame's planes (sensor frame) and their
+//!    [`PlaneDescriptor`](descriptor::PlaneDescriptor) are stored.
+//! 2. **Candidates** ([`LoopDetector::candidates`]): entries at least
+//!    `min_frames_apart` frames back, whose pose lies within a plausible
+//!    distance of the current estimate (`search_radius` plus
+//!    `radius_per_metre` of the path travelled since: the drift it may
+//!    have gathered), ranked by descriptor distance (at most
+//!    `max_descriptor_distance`), the best `max_candidates`.
+//! 3. **Verification** ([`verify`]): plane registration against the
+//!    candidate with inlier, observability and plausibility gates.
+//! 4. **Loop factor**: a relative-pose factor between the two frames under
+//!    a robust kernel ([`LoopConstraint`], added to the pose-plane graph by
+//!    [`crate::slam::graph`]; it is the existing
+//!    [`Between`](crate::backend::Between) factor, whose Jacobian is
+//!    property-tested in `tests/backend_props.rs`). When the loop moves the
+//!    estimate by more than `resolve_correction`, the tracker re-solves the
+//!    whole graph at once and carries on from the result.
+//! 5. **Duplicate landmarks** ([`merge`]): after the re-solve the same
+//!    plane, mapped twice before the loop was closed, is one landmark
+//!    again.
+
+pub mod descriptor;
+pub mod merge;
+pub mod verify;
+
+use nalgebra::{Isometry3, Matrix6, Vector6};
+use serde::{Deserialize, Serialize};
+
+use crate::backend::RobustKernel;
+use crate::frontend::FramePlane;
+use crate::registration::{MatchCriteria, SurfaceSample};
+use descriptor::PlaneDescriptor;
+
+pub use merge::{merge_duplicates, MergeDuplicates};
+pub use verify::{LoopMatch, LoopRejection, Pair, Samples, Verifier};
+
+/// Loop-closure settings (`[slam.loop_closure]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LoopClosureParams {
+    /// Look for loops at all.
+    pub enabled: bool,
+    /// A frame enters the keyframe database (and looks for a loop) once
+    /// the sensor moved this far from the last entry, m ...
+    pub keyframe_move: f64,
+    /// ... or turned this much, degrees.
+    pub keyframe_turn_deg: f64,
+    /// Candidates lie at least this many frames back.
+    pub min_frames_apart: usize,
+    /// Candidates lie within this distance of the current estimate, m ...
+    pub search_radius: f64,
+    /// ... plus this share of the path travelled since them (drift).
+    pub radius_per_metre: f64,
+    /// Descriptor distance (`1 −` cosine similarity) of a candidate at
+    /// most.
+    pub max_descriptor_distance: f64,
+    /// Candidates verified per query, best descriptor first.
+    pub max_candidates: usize,
+    /// Plane matching of the verification (looser than frame-to-frame: the
+    /// viewpoints differ and the estimate has drifted).
+    pub matching: MatchCriteria,
+    /// The candidate's points for the directions the planes leave free are
+    /// those of this many database keyframes either side of it too (one
+    /// frame's samples are too sparse to fix a corridor's axis; the
+    /// tracker's point map holds many).
+    pub submap_keyframes: usize,
+    /// Information (facing samples matched, `Σ (n·v)²`) a free direction
+    /// needs to be fixed by the points in a verification.
+    pub min_point_information: f64,
+    /// Points fix free directions only for a candidate within this distance
+    /// of the current estimate, m: from nearly the same viewpoint both
+    /// frames sample the same surfaces (farther apart, a door frame's
+    /// samples meet the wall beside it and bias the axis by decimetres).
+    pub max_point_distance: f64,
+    /// Plane pairs that must agree with the verified pose.
+    pub min_inliers: usize,
+    /// Smallest eigenvalue of the verifying registration's `JᵀJ` (every
+    /// direction observed).
+    pub min_eigenvalue: f64,
+    /// A verified loop moves the estimate by at most this, m ...
+    pub max_correction: f64,
+    /// ... plus this share of the path travelled since the candidate
+    /// (the drift tracking may have gathered; a registration that moves
+    /// the estimate further has matched a wrong plane).
+    pub max_correction_per_metre: f64,
+    /// ... and this, degrees.
+    pub max_correction_deg: f64,
+    /// Loop-factor translation noise, m.
+    pub translation_sigma: f64,
+    /// Loop-factor rotation noise, radians.
+    pub rotation_sigma: f64,
+    /// Robust kernel on loop factors (a wrong loop that passed the gates
+    /// is down-weighted, not obeyed).
+    pub robust: RobustKernel,
+    /// The whole graph is re-solved during tracking when a loop moves the
+    /// estimate by more than this, m (smaller corrections wait for the
+    /// batch at the end).
+    pub resolve_correction: f64,
+    /// Duplicate landmarks merge when their normals agree within this,
+    /// degrees ...
+    pub merge_max_angle_deg: f64,
+    /// ... each one's boundary centre lies within this of the other's
+    /// plane, m ...
+    pub merge_max_offset: f64,
+    /// ... and their extents overlap by this share of the smaller one.
+    pub merge_min_overlap: f64,
+}
+
+impl Default for LoopClosureParams {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            keyframe_move: 1.0,
+            keyframe_turn_deg: 20.0,
+            min_frames_apart: 300,
+            search_radius: 5.0,
+            radius_per_metre: 0.02,
+            max_descriptor_distance: 0.5,
+            max_candidates: 3,
+            matching: MatchCriteria {
+                min_normal_cos: 0.9,
+                max_offset: 0.3,
+                max_centroid_distance: 5.0,
+                max_area_ratio: 10.0,
+            },
+            submap_keyframes: 3,
+            min_point_information: 20.0,
+            max_point_distance: 1.0,
+            min_inliers: 6,
+            min_eigenvalue: 0.5,
+            max_correction: 0.02,
+            max_correction_per_metre: 0.002,
+            max_correction_deg: 5.0,
+            translation_sigma: 0.02,
+            rotation_sigma: 0.005,
+            robust: RobustKernel::Cauchy { k: 1.0 },
+            resolve_correction: 0.03,
+            merge_max_angle_deg: 3.0,
+            merge_max_offset: 0.05,
+            merge_min_overlap: 0.3,
+        }
+    }
+}
+
+impl LoopClosureParams {
+    /// An error message naming the first invalid key.
+    pub fn validate(&self) -> Result<(), String> {
+        let non_negative = [
+            ("keyframe_move", self.keyframe_move),
+            ("keyframe_turn_deg", self.keyframe_turn_deg),
+            ("search_radius", self.search_radius),
+            ("radius_per_metre", self.radius_per_metre),
+            ("max_descriptor_distance", self.max_descriptor_distance),
+            ("min_eigenvalue", self.min_eigenvalue),
+            ("min_point_information", self.min_point_information),
+            ("max_point_distance", self.max_point_distance),
+            ("max_correction", self.max_correction),
+            ("max_correction_per_metre", self.max_correction_per_metre),
+            ("max_correction_deg", self.max_correction_deg),
+            ("resolve_correction", self.resolve_correction),
+            ("merge_max_angle_deg", self.merge_max_angle_deg),
+            ("merge_max_offset", self.merge_max_offset),
+            ("merge_min_overlap", self.merge_min_overlap),
+        ];
+        for (name, v) in non_negative {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!("slam.loop_closure.{name} must be >= 0, got {v}"));
+            }
+        }
+        for (name, v) in [
+            ("translation_sigma", self.translation_sigma),
+            ("rotation_sigma", self.rotation_sigma),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!(
+                    "slam.loop_closure.{name} must be positive, got {v}"
+                ));
+            }
+        }
+        if self.min_inliers < 3 {
+            return Err("slam.loop_closure.min_inliers must be at least 3".into());
+        }
+        self.robust
+            .validate()
+            .map_err(|e| format!("slam.loop_closure.robust: {e}"))
+    }
+
+    /// Square-root information of a loop factor.
+    pub fn sqrt_info(&self) -> Matrix6<f64> {
+        let t = 1.0 / self.translation_sigma;
+        let r = 1.0 / self.rotation_sigma;
+        Matrix6::from_diagonal(&Vector6::new(t, t, t, r, r, r))
+    }
+}
+
+/// A verified loop, as the back-end's relative-pose measurement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoopConstraint {
+    /// The earlier frame (the candidate keyframe).
+    pub from: usize,
+    /// The current frame.
+    pub to: usize,
+    /// `T_from_to`, measured by the verification.
+    pub relative: Isometry3<f64>,
+    /// Square-root information of the measurement.
+    pub sqrt_info: Matrix6<f64>,
+    /// Robust kernel of its factor.
+    pub robust: RobustKernel,
+    /// What the verification found.
+    pub check: LoopMatch,
+}
+
+/// One keyframe of the database.
+#[derive(Debug, Clone)]
+struct Entry {
+    frame: usize,
+    planes: Vec<FramePlane>,
+    samples: Vec<SurfaceSample>,
+    descriptor: PlaneDescriptor,
+}
+
+/// The keyframe database and the path length per frame, for the candidate
+/// search.
+#[derive(Debug, Clone, Default)]
+pub struct LoopDetector {
+    entries: Vec<Entry>,
+    /// Path length up to each frame, m.
+    path: Vec<f64>,
+    /// Pose of the last entry.
+    last: Option<Isometry3<f64>>,
+}
+
+/// A candidate keyframe for a loop with the current frame.
+#[derive(Debug, Clone)]
+pub struct Candidate<'a> {
+    /// Its frame index.
+    pub frame: usize,
+    /// Its planes (sensor frame).
+    pub planes: &'a [FramePlane],
+    /// Descriptor distance to the current frame.
+    pub distance: f64,
+}
+
+impl LoopDetector {
+    /// An empty database.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Number of keyframes stored.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether no keyframe is stored.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Record that frame `frame` was tracked at `pose` (call once per
+    /// frame, in order) and whether it is a loop keyframe by `params`.
+    pub fn advance(
+        &mut self,
+        frame: usize,
+        pose: &Isometry3<f64>,
+        previous: Option<&Isometry3<f64>>,
+        params: &LoopClosureParams,
+    ) -> bool {
+        let step = previous.map_or(0.0, |p| {
+            (pose.translation.vector - p.translation.vector).norm()
+        });
+        let before = self.path.last().copied().unwrap_or(0.0);
+        self.path.resize(frame, before);
+        self.path.push(before + step);
+        match &self.last {
+            None => true,
+            Some(last) => {
+                let rel = last.inverse() * pose;
+                rel.translation.vector.norm() >= params.keyframe_move
+                    || rel.rotation.angle().to_degrees() >= params.keyframe_turn_deg
+            }
+        }
+    }
+
+    /// Store frame `frame`'s planes and surface samples (sensor frame)
+    /// tracked at `pose`.
+    pub fn insert(
+        &mut self,
+        frame: usize,
+        planes: &[FramePlane],
+        samples: &[SurfaceSample],
+        pose: &Isometry3<f64>,
+    ) {
+        let planes: Vec<FramePlane> = planes
+            .iter()
+            .map(|p| FramePlane {
+                inliers: Vec::new(),
+                ..p.clone()
+            })
+            .collect();
+        let descriptor = PlaneDescriptor::of(&planes);
+        self.entries.push(Entry {
+            frame,
+            planes,
+            samples: samples.to_vec(),
+            descriptor,
+        });
+        self.last = Some(*pose);
+    }
+
+    /// The path travelled from frame `from` to frame `to` (as far as
+    /// recorded), m.
+    pub fn path_between(&self, from: usize, to: usize) -> f64 {
+        let at = |k: usize| {
+            self.path
+                .get(k)
+                .or(self.path.last())
+                .copied()
+                .unwrap_or(0.0)
+        };
+        (at(to) - at(from)).max(0.0)
+    }
+
+    /// Move the last entry's pose (after a re-solve).
+    pub fn correct_last(&mut self, pose: &Isometry3<f64>) {
+        if self.last.is_some() {
+            self.last = Some(*pose);
+        }
+    }
+
+    /// The surface samples of the keyframe of frame `frame` and of
+    /// `neighbours` keyframes either side of it in the database, in
+    /// `frame`'s sensor frame (`poses[k]`: frame `k`'s current estimate).
+    pub fn submap(
+        &self,
+        frame: usize,
+        neighbours: usize,
+        poses: impl Fn(usize) -> Option<Isometry3<f64>>,
+    ) -> Vec<SurfaceSample> {
+        let Ok(at) = self.entries.binary_search_by_key(&frame, |e| e.frame) else {
+            return Vec::new();
+        };
+        let Some(origin) = poses(frame) else {
+            return Vec::new();
+        };
+        let lo = at.saturating_sub(neighbours);
+        let hi = (at + neighbours + 1).min(self.entries.len());
+        let mut out = Vec::new();
+        for e in &self.entries[lo..hi] {
+            let Some(pose) = poses(e.frame) else {
+                continue;
+            };
+            let t = origin.inverse() * pose;
+            out.extend(e.samples.iter().map(|s| SurfaceSample {
+                point: t * s.point,
+                normal: t.rotation * s.normal,
+            }));
+        }
+        out
+    }
+
+    /// The candidates for a loop with frame `frame` (planes `planes`,
+    /// estimated at `pose`; `poses[k]` is frame `k`'s current estimate),
+    /// best descriptor first ([module docs](self)).
+    pub fn candidates(
+        &self,
+        frame: usize,
+        planes: &[FramePlane],
+        pose: &Isometry3<f64>,
+        poses: impl Fn(usize) -> Option<Isometry3<f64>>,
+        params: &LoopClosureParams,
+    ) -> Vec<Candidate<'_>> {
+        let here = self.path.get(frame).copied().unwrap_or(0.0);
+        let descriptor = PlaneDescriptor::of(planes);
+        let mut out: Vec<Candidate<'_>> = self
+            .entries
+            .iter()
+            .filter(|e| e.frame + params.min_frames_apart <= frame)
+            .filter(|e| {
+                let Some(p) = poses(e.frame) else {
+                    return false;
+                };
+                let travelled = here - self.path.get(e.frame).copied().unwrap_or(here);
+                let radius = params.search_radius + params.radius_per_metre * travelled.max(0.0);
+                (p.translation.vector - pose.translation.vector).norm() <= radius
+            })
+            .map(|e| Candidate {
+                frame: e.frame,
+                planes: &e.planes,
+                distance: descriptor.distance(&e.descriptor),
+            })
+            .filter(|c| c.distance <= params.max_descriptor_distance)
+            .collect();
+        out.sort_by(|a, b| {
+            a.distance
+                .total_cmp(&b.distance)
+                .then(a.frame.cmp(&b.frame))
+        });
+        out.truncate(params.max_candidates);
+        out
+    }
+}
