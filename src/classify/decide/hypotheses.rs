@@ -4,7 +4,7 @@
 
 use nalgebra::Point3;
 
-use super::SurfaceSupport;
+use super::{DecisionParams, SurfaceSupport};
 use crate::classify::boundary::beam_crossing;
 use crate::classify::space::{Occupancy, SensorFrameSpace};
 
@@ -23,17 +23,21 @@ pub(super) enum Verdict {
 /// measured, reached straight through the plane, or the mirror image of a
 /// real point reached by reflection at the plane. Each is refuted when its
 /// endpoint lies in seen-free space or its leg beyond the crossing runs
-/// through a seen surface (tested from `margin` off the plane to `margin`
-/// before the endpoint).
+/// through a seen surface (tested from `space_margin` off the plane to
+/// `space_margin` before the endpoint; clearances and support radius from
+/// `params`).
 pub(super) fn two_hypotheses(
     space: &SensorFrameSpace<'_>,
     support: Option<&dyn SurfaceSupport>,
-    support_radius: f64,
     plane: &crate::geometry::Plane,
     p: &Point3<f64>,
-    margin: f64,
-    clearance_ratio: f64,
+    params: &DecisionParams,
 ) -> Verdict {
+    let (support_radius, margin, clearance_ratio) = (
+        params.support_radius,
+        params.space_margin,
+        params.space_clearance_ratio,
+    );
     let range = p.coords.norm();
     let Some(t) = beam_crossing(plane, p) else {
         return Verdict::Open;

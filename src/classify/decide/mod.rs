@@ -504,15 +504,7 @@ pub fn decide_with_hits(
         let on_beam = along_beam
             .is_some_and(|(closest, _)| (closest - mirrored_range).abs() <= params.support_range);
         if let Some(space) = space.filter(|_| params.space_test && single_pane && !on_beam) {
-            match two_hypotheses(
-                space,
-                support,
-                params.support_radius,
-                &bp.plane,
-                &p,
-                params.space_margin,
-                params.space_clearance_ratio,
-            ) {
+            match two_hypotheses(space, support, &bp.plane, &p, params) {
                 Verdict::Mirror => {
                     (classes[i], rules[i]) = (Class::Reflection, Rule::RealRefuted);
                     continue;

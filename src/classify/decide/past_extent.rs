@@ -45,15 +45,7 @@ pub(super) fn past_seen_extent(
 ) -> Option<(Class, Rule)> {
     let p = frame.points[i].position();
     if let Some(space) = space.filter(|_| params.space_test) {
-        match two_hypotheses(
-            space,
-            support,
-            params.support_radius,
-            &bp.plane,
-            &p,
-            params.space_margin,
-            params.space_clearance_ratio,
-        ) {
+        match two_hypotheses(space, support, &bp.plane, &p, params) {
             Verdict::Mirror => return Some((Class::Reflection, Rule::RealRefuted)),
             Verdict::Real => return Some((Class::Normal, Rule::MirrorRefuted)),
             Verdict::Open => {}
