@@ -231,6 +231,11 @@ impl BeamPlanes<'_> {
         let origin = Point3::origin();
         let mut best: Option<(usize, f64)> = None;
         for (k, bp) in self.planes.iter().enumerate() {
+            // A point on the sensor's side of a plane that faces the sensor
+            // is not behind it: no ray intersection needed.
+            if bp.plane.d > 0.0 && bp.plane.signed_distance(p) >= 0.0 {
+                continue;
+            }
             let Some(t) = crossing_along(&bp.plane, &dir) else {
                 continue;
             };

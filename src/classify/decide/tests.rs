@@ -52,6 +52,19 @@ fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
     }
 }
 
+/// An evidence grid without votes over the pane's chart (10 x 10 m, 0.2 m
+/// cells, 3 votes to decide).
+fn empty_grid() -> crate::geometry::grid::EvidenceGrid {
+    crate::geometry::grid::EvidenceGrid::new(
+        nalgebra::Point2::new(-5.0, -5.0),
+        nalgebra::Point2::new(5.0, 5.0),
+        0.2,
+        3,
+        1_000_000,
+    )
+    .expect("a grid")
+}
+
 /// The room in front of the pane seen directly from a second pose: its
 /// air carved, its back wall at x = -3 and the floor hit.
 fn room_space() -> SpaceMap {
@@ -192,15 +205,7 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
     // A strong (real) echo whose beam crossed the plane far from every
     // glass echo came through an opening the pane's extent covers: Normal
     // with the echo reach set.
-    use crate::geometry::grid::EvidenceGrid;
-    let mut grid = EvidenceGrid::new(
-        nalgebra::Point2::new(-5.0, -5.0),
-        nalgebra::Point2::new(5.0, 5.0),
-        0.2,
-        3,
-        1_000_000,
-    )
-    .expect("a grid");
+    let mut grid = empty_grid();
     grid.vote_echo(&planes[0].chart.to_2d(&Point3::new(5.0, 1.8, 0.2)));
     planes[0].evidence = Some(std::sync::Arc::new(grid));
     let reach = |seen_surface_echo_reach| DecisionParams {
@@ -274,8 +279,6 @@ fn a_point_on_a_surface_seen_directly_is_real() {
 /// crossing, or with the reach 0.
 #[test]
 fn a_real_point_seen_through_an_opening_is_normal() {
-    use crate::geometry::grid::EvidenceGrid;
-    use nalgebra::Point2;
     let space = wall_seen_from(Point3::new(7.0, 0.0, 0.0), 8.0);
     let point = [[8.0f32, 0.1, 0.1]];
     // The beam crosses the pane at (5, 0.0625, 0.0625).
@@ -283,14 +286,7 @@ fn a_real_point_seen_through_an_opening_is_normal() {
     let with_echo_at = |at: Point3<f64>| {
         let mut planes = pane();
         let chart = planes[0].chart;
-        let mut grid = EvidenceGrid::new(
-            Point2::new(-5.0, -5.0),
-            Point2::new(5.0, 5.0),
-            0.2,
-            3,
-            1_000_000,
-        )
-        .expect("a grid");
+        let mut grid = empty_grid();
         grid.vote_echo(&chart.to_2d(&at));
         planes[0].evidence = Some(std::sync::Arc::new(grid));
         planes
@@ -534,8 +530,6 @@ fn the_near_return_of_an_obstacle_beam_is_a_reflection() {
 /// opaque plane there, it is Normal.
 #[test]
 fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_supported() {
-    use crate::geometry::grid::EvidenceGrid;
-    use nalgebra::Point2;
     // Behind the plane at (6, 0, 2.76): its beam crosses x = 5 at z = 2.3,
     // above the pane's top (z = 2). Its mirror image (4, 0, 2.76) is a
     // surface the frame saw.
@@ -563,14 +557,7 @@ fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_support
     // Opaque votes where the beam crosses: a wall strip above the pane.
     let mut planes = pane();
     let chart = planes[0].chart;
-    let mut grid = EvidenceGrid::new(
-        Point2::new(-5.0, -5.0),
-        Point2::new(5.0, 5.0),
-        0.2,
-        3,
-        1_000_000,
-    )
-    .expect("a grid");
+    let mut grid = empty_grid();
     grid.vote(&chart.to_2d(&Point3::new(5.0, 0.0, 2.3)), 0, 5);
     grid.finalize();
     planes[0].evidence = Some(std::sync::Arc::new(grid));
