@@ -11,6 +11,7 @@ pub mod evidence;
 pub mod landmark;
 pub mod merge;
 pub mod panes;
+pub mod params;
 
 pub use evidence::{
     gather_evidence, open_where_crossed, passed_through, path_crossings, EvidenceFrame,
@@ -19,3 +20,4 @@ pub use evidence::{
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};
+pub use params::{BoundaryMode, MapParams, MergerName};

@@ -33,12 +33,12 @@ use crate::classify::{
     SupportBuilder, WorldSupport,
 };
 use crate::cloud::Frame;
-use crate::config::{BoundaryMode, Config};
+use crate::config::Config;
 use crate::geometry::voxel::VoxelSet;
 use crate::io::{MapPoint, PlaneKind};
 use crate::map::{
-    find_panes, open_where_crossed, passed_through, EvidenceFrame, EvidenceGatherer, EvidenceTotal,
-    PlaneMap, PlaneObservation,
+    find_panes, open_where_crossed, passed_through, BoundaryMode, EvidenceFrame, EvidenceGatherer,
+    EvidenceTotal, PlaneMap, PlaneObservation,
 };
 use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{planes_seen_from, BoundedPlane, Detection, EchoHistogram, EchoSplit};

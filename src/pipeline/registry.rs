@@ -5,10 +5,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::classify::{Classifier, PlaneMapClassifier, SingleScanClassifier};
-use crate::config::{Config, MergerName};
+use crate::config::Config;
 use crate::frontend::{ExtractorName, PlaneExtractor, RegionGrowingExtractor};
 use crate::io::{Dataset, PlyDir, Ros2Bag};
-use crate::map::{MapMerger, WeightedAverageMerger};
+use crate::map::{MapMerger, MergerName, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
 use crate::registration::{AcceptAll, GroundTripleRansac, MismatchRejector, RejectorName};
 use crate::sensor::SensorModel;

@@ -19,6 +19,7 @@ use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::StageTimings;
 use crate::cloud::Frame;
@@ -52,6 +53,46 @@ impl std::fmt::Debug for Sequence {
 /// Megabytes of parsed frames a sequence read from files keeps by default
 /// ([`Sequence::with_frame_cache`]).
 pub const DEFAULT_FRAME_CACHE_MB: f64 = 256.0;
+
+/// Input handling: how frames find their poses and how many parsed frames
+/// a sequence keeps (the `[input]` section of the configuration).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InputParams {
+    /// A frame is matched to the pose with the nearest timestamp, which must
+    /// be within this many seconds.
+    pub pose_tolerance: f64,
+    /// A frame with no pose within `pose_tolerance` gets one interpolated
+    /// between the poses before and after it (SLERP) when they are at most
+    /// this many seconds apart; beyond, the run stops naming the frame
+    /// (0: never interpolate).
+    pub pose_interpolation_gap: f64,
+    /// Frames read from files are kept in memory after their first read,
+    /// up to this many megabytes of points, so later passes over the
+    /// sequence do not parse them again; beyond it frames are re-read at
+    /// every pass (memory stays bounded whatever the sequence length).
+    pub frame_cache_mb: f64,
+}
+
+impl InputParams {
+    /// How frames find their poses.
+    pub fn pose_matching(&self) -> crate::io::PoseMatching {
+        crate::io::PoseMatching {
+            tolerance: self.pose_tolerance,
+            max_gap: self.pose_interpolation_gap,
+        }
+    }
+}
+
+impl Default for InputParams {
+    fn default() -> Self {
+        Self {
+            pose_tolerance: 0.01,
+            pose_interpolation_gap: 0.0,
+            frame_cache_mb: DEFAULT_FRAME_CACHE_MB,
+        }
+    }
+}
 
 /// Frames kept after their first read, up to a budget of bytes: the first
 /// frames of a sequence (passes read in order), so a short sequence is

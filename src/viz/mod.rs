@@ -8,13 +8,16 @@
 //! | [`plots`] | `trajectory.png` (estimate and ground truth), `metrics.png` |
 //! | [`corner`] | the around-the-corner figure (of `specular-reproduce`) |
 //! | [`report`] | `report.md` |
+//! | [`params`] | what the outputs are made of (`[output]` in the configuration) |
 
 pub mod corner;
 pub mod floor;
 pub mod legend;
 pub mod mcap;
+pub mod params;
 pub mod plots;
 pub mod report;
 pub mod topdown;
 
 pub use self::mcap::{write_run_mcap, McapRecorder, McapRun, McapSummary};
+pub use params::OutputParams;

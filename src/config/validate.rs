@@ -1,0 +1,127 @@
+//! Range checks on the composed configuration, each naming the key it
+//! rejects: run when a configuration is loaded, so no stage sees a value
+//! it cannot use.
+
+use super::Config;
+
+impl Config {
+    pub(super) fn validate(&self) -> std::result::Result<(), String> {
+        let d = &self.detector;
+        let positive = [
+            ("detector.dual_gap", d.dual_gap),
+            ("detector.ransac.distance", d.ransac.distance),
+            (
+                "single_scan.decision.glass_distance",
+                self.single_scan.decision.glass_distance,
+            ),
+            ("input.pose_tolerance", self.input.pose_tolerance),
+            (
+                "plane_map.decision.glass_distance",
+                self.plane_map.decision.glass_distance,
+            ),
+            ("plane_map.support_voxel", self.plane_map.support_voxel),
+            ("extractor.ransac.distance", self.extractor.ransac.distance),
+            (
+                "extractor.ground.ransac.distance",
+                self.extractor.ground.ransac.distance,
+            ),
+            ("extractor.normals.max_gap", self.extractor.normals.max_gap),
+            ("extractor.min_area", self.extractor.min_area),
+            (
+                "slam.rejector.inlier_offset",
+                self.slam.rejector.inlier_offset,
+            ),
+            (
+                "slam.frame_matching.max_centroid_distance",
+                self.slam.frame_matching.max_centroid_distance,
+            ),
+            ("slam.rpe_segment", self.slam.rpe_segment),
+        ];
+        for (name, v) in positive {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("{name} must be positive, got {v}"));
+            }
+        }
+        let gap = self.input.pose_interpolation_gap;
+        if !(gap >= 0.0 && gap.is_finite()) {
+            return Err(format!(
+                "input.pose_interpolation_gap must be >= 0 (0: never interpolate), got {gap}"
+            ));
+        }
+        if !(d.ransac.probability > 0.0 && d.ransac.probability < 1.0) {
+            return Err(format!(
+                "detector.ransac.probability must be in (0, 1), got {}",
+                d.ransac.probability
+            ));
+        }
+        if d.ransac.max_iterations == 0 || d.max_planes == 0 {
+            return Err(
+                "detector.ransac.max_iterations and detector.max_planes must be at least 1".into(),
+            );
+        }
+        for (name, dec) in [
+            ("single_scan", &self.single_scan.decision),
+            ("plane_map", &self.plane_map.decision),
+        ] {
+            if dec.behind_distance < dec.glass_distance {
+                return Err(format!(
+                    "{name}.decision.behind_distance must be >= glass_distance"
+                ));
+            }
+        }
+        for (name, r) in [
+            ("extractor.ransac", &self.extractor.ransac),
+            ("extractor.ground.ransac", &self.extractor.ground.ransac),
+        ] {
+            if !(r.probability > 0.0 && r.probability < 1.0) || r.max_iterations == 0 {
+                return Err(format!(
+                    "{name}: probability must be in (0, 1) and max_iterations at least 1"
+                ));
+            }
+        }
+        if self.extractor.min_points < 3 {
+            return Err("extractor.min_points must be at least 3".into());
+        }
+        for (name, v) in [
+            (
+                "slam.frame_matching.min_normal_cos",
+                self.slam.frame_matching.min_normal_cos,
+            ),
+            (
+                "slam.map_matching.min_normal_cos",
+                self.slam.map_matching.min_normal_cos,
+            ),
+            (
+                "slam.map_matching.min_overlap",
+                self.slam.map_matching.min_overlap,
+            ),
+        ] {
+            if !(v > 0.0 && v <= 1.0) {
+                return Err(format!("{name} must be in (0, 1], got {v}"));
+            }
+        }
+        if !(self.slam.gauss_newton.degeneracy_threshold >= 0.0)
+            || !(self.slam.rejector.min_eigenvalue >= 0.0)
+        {
+            return Err(
+                "slam.gauss_newton.degeneracy_threshold and slam.rejector.min_eigenvalue must be >= 0"
+                    .into(),
+            );
+        }
+        if self.map.min_observations == 0 {
+            return Err("map.min_observations must be at least 1".into());
+        }
+        if !(self.output.map_voxel >= 0.0) {
+            return Err("output.map_voxel must be >= 0".into());
+        }
+        if !(self.output.topdown_min_height < self.output.topdown_max_height) {
+            return Err(
+                "output.topdown_min_height must be below output.topdown_max_height (-inf and inf: no bound)"
+                    .into(),
+            );
+        }
+        self.slam.loop_closure.validate()?;
+        self.backend.validate().map_err(|e| e.to_string())?;
+        Ok(())
+    }
+}
