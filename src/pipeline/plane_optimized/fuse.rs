@@ -1,0 +1,159 @@
+//! Steps 2 and 3: the reflective plane map. The frames' observations are
+//! fused into landmarks in timestamp order (the configured [`MapMerger`]),
+//! the landmarks observed often enough are kept, and each kept landmark is
+//! bounded: by its fused hull (the paper), or by the transparency evidence
+//! gathered over the whole sequence and the panes found in it.
+//!
+//! [`MapMerger`]: crate::map::MapMerger
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use nalgebra::{Isometry3, Point3};
+
+use super::detect::FrameSummary;
+use crate::config::Config;
+use crate::map::{
+    find_panes, open_where_crossed, BoundaryMode, EvidenceFrame, EvidenceGatherer, EvidenceTotal,
+    PlaneMap,
+};
+use crate::pipeline::registry::merger;
+use crate::pipeline::{Sequence, StageTimings};
+use crate::reflect::BoundedPlane;
+use crate::sensor::SensorModel;
+use crate::Result;
+
+/// The fused map: every landmark, the indices of those kept, and the kept
+/// ones as bounded planes (world frame, same order as `used`).
+pub(super) struct FusedMap {
+    pub(super) map: PlaneMap,
+    pub(super) used: Vec<usize>,
+    pub(super) planes: Vec<BoundedPlane>,
+}
+
+/// Fuse every frame's observations into the map in timestamp order and
+/// keep the well-observed landmarks.
+pub(super) fn fuse(
+    summaries: &[FrameSummary],
+    poses: &[Isometry3<f64>],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> FusedMap {
+    let start = Instant::now();
+    let merger = merger(config);
+    let mut map = PlaneMap::new();
+    for summary in summaries {
+        for obs in &summary.observations {
+            merger.merge(&mut map, obs);
+        }
+    }
+    let used = map.reliable(poses, &config.map.selection());
+    let planes: Vec<BoundedPlane> = used.iter().map(|&i| map.landmarks[i].bounded()).collect();
+    timings.add("map", start.elapsed());
+    tracing::info!(
+        landmarks = map.landmarks.len(),
+        used = used.len(),
+        "reflective plane map fused"
+    );
+    FusedMap { map, used, planes }
+}
+
+/// Bound the kept landmarks as `config.map.boundary` says: the transparency
+/// evidence of every landmark over all frames, and the panes found in it
+/// (nothing to do for the hull).
+pub(super) fn bound(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &mut [BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<()> {
+    if config.map.boundary == BoundaryMode::Hull {
+        return Ok(());
+    }
+    gather_evidence(sequence, sensor, planes, config, timings)?;
+    if config.map.boundary == BoundaryMode::Panes {
+        let start = Instant::now();
+        for bp in planes {
+            // Without any decided evidence the hull stays the boundary.
+            if let Some(grid) = bp.evidence.as_ref().filter(|g| g.is_decided()) {
+                let panes = find_panes(grid, &config.map.panes);
+                bp.panes = Some(Arc::new(panes.into_iter().map(|p| p.boundary).collect()));
+            }
+        }
+        timings.add("panes", start.elapsed());
+    }
+    Ok(())
+}
+
+/// Gather the transparency evidence of every landmark in `planes` (world
+/// frame) in one pass over the sequence.
+fn gather_evidence(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &mut [BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<()> {
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let gatherers: Vec<Option<EvidenceGatherer>> = planes
+        .iter()
+        .enumerate()
+        .map(|(k, bp)| {
+            let others: Vec<BoundedPlane> = planes
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, o)| o.clone())
+                .collect();
+            EvidenceGatherer::new(bp, &config.map.evidence).map(|g| g.with_others(&others))
+        })
+        .collect();
+    let mut totals: Vec<Option<EvidenceTotal>> = gatherers
+        .iter()
+        .map(|g| g.as_ref().map(EvidenceGatherer::total))
+        .collect();
+    if gatherers.iter().any(Option::is_some) {
+        let reading = sequence.stream_all(
+            "evidence",
+            |k, frame| {
+                let mut t = StageTimings::default();
+                let start = Instant::now();
+                let scan = sequence.scan(k, frame, sensor)?;
+                t.add("pair", start.elapsed());
+                let start = Instant::now();
+                let f = EvidenceFrame {
+                    frame,
+                    scan: &scan,
+                    pose: poses[k],
+                };
+                let votes: Vec<_> = gatherers
+                    .iter()
+                    .map(|g| g.as_ref().map(|g| g.votes(&f)))
+                    .collect();
+                t.add("evidence", start.elapsed());
+                Ok((votes, t))
+            },
+            |_, _, (votes, t)| {
+                timings.merge(&t);
+                for (total, v) in totals.iter_mut().zip(votes) {
+                    if let (Some(total), Some(v)) = (total, v) {
+                        total.add(v);
+                    }
+                }
+                Ok(())
+            },
+        )?;
+        timings.add_reading(reading);
+    }
+    let path: Vec<Point3<f64>> = poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    for (bp, total) in planes.iter_mut().zip(totals) {
+        bp.evidence = total.map(|t| Arc::new(t.finish()));
+        // Where the sensor passed through the plane, it is open.
+        open_where_crossed(bp, &path, config.map.evidence.crossing_radius);
+    }
+    Ok(())
+}

@@ -1,0 +1,374 @@
+//! Step 4: what the keyframes saw. From frames that see the scene from a
+//! new viewpoint, passes over the sequence gather what classification
+//! needs beyond the map: the surfaces observed (a mirror's support), the
+//! space seen directly (no reflection can lie in it), and each landmark's
+//! split of the echoes behind it into reflected and transmitted ones.
+
+use std::time::Instant;
+
+use nalgebra::{Isometry3, Point3};
+
+use super::world_maps::rotation_translation;
+use crate::classify::boundary::BeamPlanes;
+use crate::classify::{
+    BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
+};
+use crate::cloud::Frame;
+use crate::map::passed_through;
+use crate::pipeline::{Sequence, StageTimings};
+use crate::reflect::echo_split::{echo_strength, is_mirror};
+use crate::reflect::{BoundedPlane, Detection, EchoHistogram, EchoSplit};
+use crate::sensor::{OrganizedScan, SensorModel};
+use crate::Result;
+
+/// Frames that see the scene from a new viewpoint: the first, then every
+/// frame whose pose moved more than `min_move` metres or turned more than
+/// `min_turn_deg` from the last one kept. Views from (nearly) the same place
+/// add no surface the support does not have already.
+pub fn keyframes(poses: &[Isometry3<f64>], min_move: f64, min_turn_deg: f64) -> Vec<usize> {
+    let mut kept: Vec<usize> = Vec::new();
+    for (k, pose) in poses.iter().enumerate() {
+        let new_view = kept.last().is_none_or(|&last| {
+            let rel = poses[last].inverse() * pose;
+            rel.translation.vector.norm() > min_move
+                || rel.rotation.angle().to_degrees() > min_turn_deg
+        });
+        if new_view {
+            kept.push(k);
+        }
+    }
+    kept
+}
+
+/// What the keyframe passes share: the sequence, how to pair a frame's
+/// returns, the classifier's beam test and the poses.
+pub(super) struct FrameViews<'a> {
+    pub(super) sequence: &'a Sequence,
+    pub(super) sensor: &'a SensorModel,
+    pub(super) classifier: &'a PlaneMapClassifier,
+    pub(super) poses: &'a [Isometry3<f64>],
+}
+
+/// The detection the plane-map classifier is given: it classifies against
+/// the map, not the frame's own planes.
+static NO_DETECTION: Detection = Detection {
+    candidates: Vec::new(),
+    planes: Vec::new(),
+};
+/// What the keyframes saw, as the classifier takes it.
+pub(super) struct Seen {
+    /// The observed surfaces (world frame), when the classifier uses them.
+    pub(super) support: Option<WorldSupport>,
+    /// The space seen directly, when the classifier tests it.
+    pub(super) space: Option<SpaceMap>,
+    /// The landmarks as classified: with their echo splits, when learned.
+    pub(super) planes: Vec<BoundedPlane>,
+}
+
+impl<'a> FrameViews<'a> {
+    /// What the keyframes saw, against the kept landmarks `planes`: the
+    /// observed surfaces (mirror support) and the space seen directly, when
+    /// the classifier uses them, and the landmarks with their echo splits
+    /// when learned (a mirror the sensor passed through is glass after all,
+    /// when `crossing_radius` opens crossings).
+    pub(super) fn what_keyframes_saw(
+        &self,
+        planes: Vec<BoundedPlane>,
+        crossing_radius: f64,
+        timings: &mut StageTimings,
+    ) -> Result<Seen> {
+        let p = self.classifier.params();
+        let poses = self.poses;
+        let support = if p.sequence_support {
+            let frames = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
+            Some(self.sequence_support(&frames, &planes, timings)?)
+        } else {
+            None
+        };
+        let space_frames = keyframes(poses, p.space_keyframe_move, p.space_keyframe_turn_deg);
+        let space = if p.decision.space_test {
+            let space = self.seen_space(&space_frames, &planes, timings)?;
+            tracing::info!(
+                keyframes = space_frames.len(),
+                bricks = space.bricks(),
+                "space seen directly"
+            );
+            Some(space)
+        } else {
+            None
+        };
+        let path: Vec<Point3<f64>> = poses
+            .iter()
+            .map(|p| Point3::from(p.translation.vector))
+            .collect();
+        let crossings_open = crossing_radius > 0.0;
+        // The landmarks as classified: with their echo splits, when learned.
+        let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
+            (Some(space), true) => self
+                .echo_splits(&space_frames, &planes, space, timings)?
+                .into_iter()
+                .zip(&planes)
+                .map(|((echo_split, mirror), bp)| BoundedPlane {
+                    echo_split,
+                    // Nobody walks through a mirror.
+                    mirror: mirror && !(crossings_open && passed_through(bp, &path)),
+                    ..bp.clone()
+                })
+                .collect(),
+            _ => planes,
+        };
+        Ok(Seen {
+            support,
+            space,
+            planes,
+        })
+    }
+
+    /// The classifier's input for frame `k` against `planes` (no support,
+    /// space or precomputed beam test).
+    pub(super) fn input<'b>(
+        &'b self,
+        k: usize,
+        frame: &'b Frame,
+        scan: &'b OrganizedScan,
+        planes: &'b [BoundedPlane],
+    ) -> FrameInput<'b> {
+        FrameInput {
+            frame,
+            scan,
+            sensor: self.sensor,
+            detection: &NO_DETECTION,
+            pose: self.poses[k],
+            map_planes: planes,
+            support: None,
+            space: None,
+            beam_hits: None,
+        }
+    }
+
+    /// One pass over the keyframes `frames`: `work` gets each frame's
+    /// input with its beam test against `planes`.
+    fn pass<T: Send>(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        stage: &'static str,
+        timings: &mut StageTimings,
+        work: impl Fn(&FrameInput<'_>, &BeamHits) -> T + Sync,
+        mut consume: impl FnMut(T),
+    ) -> Result<()> {
+        let mut cpu = StageTimings::default();
+        let reading = self.sequence.stream(
+            frames,
+            stage,
+            |k, frame| {
+                let start = Instant::now();
+                let scan = self.sequence.scan(k, frame, self.sensor)?;
+                let input = self.input(k, frame, &scan, planes);
+                let hits = self.classifier.beam_hits(&input);
+                Ok((work(&input, &hits), start.elapsed()))
+            },
+            |_, _, (out, d)| {
+                cpu.add(stage, d);
+                consume(out);
+                Ok(())
+            },
+        )?;
+        timings.merge(&cpu);
+        timings.add_reading(reading);
+        Ok(())
+    }
+
+    /// The observed surfaces of the keyframes `frames` (world frame),
+    /// thinned by voxel.
+    fn sequence_support(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        timings: &mut StageTimings,
+    ) -> Result<WorldSupport> {
+        let p = self.classifier.params();
+        let mut builder = SupportBuilder::new(p.support_voxel, p.decision.support_radius);
+        self.pass(
+            frames,
+            planes,
+            "support",
+            timings,
+            |input, hits| {
+                let (r, t) = rotation_translation(&input.pose);
+                let points = &input.frame.points;
+                self.classifier
+                    .surface_points(input, hits)
+                    .into_iter()
+                    .map(|i| Point3::from(r * points[i as usize].position().coords + t))
+                    .collect::<Vec<_>>()
+            },
+            |points| builder.extend(points),
+        )?;
+        Ok(builder.finish())
+    }
+
+    /// The space seen directly from the keyframes `frames` (world frame):
+    /// every beam that crosses no reflective pane marks its endpoint
+    /// occupied and carves the voxels before it; a beam that crosses a pane
+    /// carves only up to the pane. Of a beam's two returns only the nearer
+    /// is used: the farther may have passed an unmapped pane.
+    fn seen_space(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        timings: &mut StageTimings,
+    ) -> Result<SpaceMap> {
+        let p = self.classifier.params();
+        let glass = p.decision.glass_distance;
+        let mut space = SpaceMap::new(p.space_voxel, p.space_min_passes, p.space_block_hits);
+        let min_stop = 2.0 * space.voxel();
+        let stride = p.space_column_stride.max(1);
+        self.pass(
+            frames,
+            planes,
+            "space",
+            timings,
+            |inp, hits| {
+                let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
+                let (r, t) = rotation_translation(&inp.pose);
+                let points = &inp.frame.points;
+                let mut beams = Vec::with_capacity(points.len());
+                for (i, pt) in points.iter().enumerate() {
+                    let range = pt.range();
+                    if !(range > 0.0) {
+                        continue;
+                    }
+                    if inp
+                        .scan
+                        .partner(i)
+                        .is_some_and(|j| points[j].range() < range)
+                    {
+                        continue;
+                    }
+                    let pos = pt.position();
+                    // Behind a pane, or behind a plane's unseen
+                    // continuation where glass may be: carve to the plane.
+                    let crossing =
+                        hits.get(i, &pos, &sensor_planes)
+                            .or(hits.unseen(i, &pos, &sensor_planes));
+                    let (end_range, hit) = match crossing {
+                        Some(h) if range >= h.range - glass => (h.range.min(range), false),
+                        _ => (range, true),
+                    };
+                    let end = Point3::from(r * (pos.coords * (end_range / range)) + t);
+                    // Every beam marks its surface; one in `stride` columns
+                    // carves.
+                    let (_, col) = inp.scan.ring_column(inp.scan.cell_of(i));
+                    let stop = if col % stride == 0 {
+                        min_stop.max(p.space_stop_ratio * range)
+                    } else {
+                        f64::INFINITY
+                    };
+                    beams.push((end, stop, hit));
+                }
+                (Point3::from(t), beams)
+            },
+            |(origin, beams)| {
+                for (end, stop, hit) in beams {
+                    space.add_beam(&origin, &end, stop, hit);
+                }
+            },
+        )?;
+        Ok(space)
+    }
+
+    /// Each plane's split of echoes behind it into reflected and
+    /// transmitted ones ([`EchoSplit`]), and whether it is a mirror, from
+    /// the keyframes `frames`: the strengths of every point behind the
+    /// plane, oriented by the points whose mirror image lies in seen-free
+    /// space (they cannot be reflections; a plane with almost none is a
+    /// mirror).
+    fn echo_splits(
+        &self,
+        frames: &[usize],
+        planes: &[BoundedPlane],
+        space: &SpaceMap,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<(Option<EchoSplit>, bool)>> {
+        let p = self.classifier.params();
+        let behind = p.decision.behind_distance;
+        let glass = p.decision.glass_distance;
+        let clearance = p.decision.space_clearance_ratio;
+        let exponent = p.echo_split.range_exponent;
+        let incidence = p.echo_split.incidence_correction;
+        // Per landmark: the strengths of all points behind it, and of its
+        // anchors, summed over the keyframes (integer counts: the result
+        // does not depend on the order or the threads).
+        let empty = || vec![(EchoHistogram::default(), EchoHistogram::default()); planes.len()];
+        let mut totals = empty();
+        self.pass(
+            frames,
+            planes,
+            "echo split",
+            timings,
+            |inp, hits| {
+                let mut out = empty();
+                let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
+                let view = space.in_sensor_frame(inp.pose);
+                let beams = BeamPlanes::hulls(&sensor_planes, p.hull_margin);
+                for (i, pt) in inp.frame.points.iter().enumerate() {
+                    let pos = pt.position();
+                    let Some(h) = hits.get(i, &pos, &sensor_planes) else {
+                        continue;
+                    };
+                    let range = pos.coords.norm();
+                    // Only beams behind one pane: past a second one the
+                    // mirror of the first says nothing.
+                    if range - h.range <= behind
+                        || beams.second_pane(&pos, h.plane, h.range, glass, behind)
+                    {
+                        continue;
+                    }
+                    let cos = if incidence {
+                        inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
+                    } else {
+                        1.0
+                    };
+                    let strength = echo_strength(pt.intensity, range, exponent, cos);
+                    out[h.plane].0.add(strength);
+                    let mirrored = sensor_planes[h.plane].plane.mirror(&pos);
+                    // A glass echo of a second pane behind this one is
+                    // transmitted by this one, but its strength is that
+                    // pane's echo, not a surface's: no anchor.
+                    let on_other_pane =
+                        beams.crosses_between(&pos, h.plane, range - glass, range + glass);
+                    if !on_other_pane
+                        && view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free
+                    {
+                        out[h.plane].1.add(strength);
+                    }
+                }
+                out
+            },
+            |frame_counts| {
+                for ((all, anchors), (all_f, anchors_f)) in totals.iter_mut().zip(&frame_counts) {
+                    all.merge(all_f);
+                    anchors.merge(anchors_f);
+                }
+            },
+        )?;
+        Ok(totals
+            .into_iter()
+            .enumerate()
+            .map(|(j, (all, anchors))| {
+                let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
+                let mirror = is_mirror(&all, &anchors, &p.echo_split);
+                tracing::debug!(
+                    plane = j,
+                    behind = all.total(),
+                    anchors = anchors.total(),
+                    ?split,
+                    mirror,
+                    "echo split"
+                );
+                (split, mirror)
+            })
+            .collect())
+    }
+}
