@@ -1,0 +1,327 @@
+//! Transparency evidence of a plane landmark, gathered over all frames.
+//!
+//! A reflective plane is an infinite plane; the paper bounds it by the convex
+//! hull of its candidate points, so wall on the same plane is called glass
+//! and glass beyond the candidates is missed. The scans say more: where a
+//! beam crosses the plane and returns from *behind* it, or where a surface
+//! echo on the plane has a second return behind it, the plane is transparent
+//! or reflective there (a beam through the plane counts only near the
+//! landmark's hull, since beyond it the "plane" may be open space); where a
+//! beam ends *on* the plane with a single
+//! return as bright as an ordinary surface, it is opaque, and a single weak
+//! echo like the plane's glass echoes is glass with nothing behind it in
+//! range. "Bright" is relative to the landmark's own glass echoes (the
+//! median intensity of its surface echoes that have a return behind them),
+//! so no sensor-specific intensity scale is assumed. Echoes near normal
+//! incidence are not used: glass peaks there like a wall. Votes are counted
+//! on a grid in the landmark's chart.
+//!
+//! The room: this module holds the parameters and the gathering (a
+//! gatherer per landmark, one frame's votes, their total and its
+//! decision); `votes` reads one frame, `crossings` opens the plane where
+//! the sensor itself passed through it.
+
+mod crossings;
+#[cfg(test)]
+mod tests;
+mod votes;
+
+pub use crossings::{open_where_crossed, passed_through, path_crossings};
+use votes::{vote_frame, IntensityCounts, Votes};
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Isometry3, Point2};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::cloud::Frame;
+use crate::geometry::grid::EvidenceGrid;
+use crate::reflect::BoundedPlane;
+use crate::sensor::OrganizedScan;
+
+/// Settings of the evidence grid.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EvidenceParams {
+    /// Cell edge length, m.
+    pub cell: f64,
+    /// The grid covers the landmark's hull grown by this much, m.
+    pub margin: f64,
+    /// Votes (cell and neighbours) needed to decide a cell.
+    pub min_votes: u32,
+    /// A return within this range of the crossing is on the plane, m.
+    pub surface_band: f64,
+    /// A return this far beyond the crossing is behind the plane, m.
+    pub behind: f64,
+    /// Beams passing the plane vote "transparent" only within this distance
+    /// of the landmark's hull (beyond it they may cross open space); surface
+    /// echoes vote anywhere on the grid, m.
+    pub pass_margin: f64,
+    /// A single echo on the plane brighter than this many times the median
+    /// glass echo is opaque (wall-like); a dimmer one is glass.
+    pub opaque_intensity_ratio: f64,
+    /// Single echoes within this angle of normal incidence cast no vote
+    /// (glass echoes peak there), degrees.
+    pub peak_angle_deg: f64,
+    /// Whether a weak single echo on the plane votes "glass". Off by default:
+    /// where the infinite plane cuts the floor, ceiling or a wall at a
+    /// grazing angle, those surfaces return weak echoes "on the plane" too.
+    pub weak_single_echo_votes: bool,
+    /// A transparent region with fewer surface echoes than this share of its
+    /// transparent votes is an opening, not glass.
+    pub min_echo_fraction: f64,
+    /// Transparent cells farther than this from any surface echo are open
+    /// space, not glass, m (0: no bound).
+    pub echo_reach: f64,
+    /// Upper bound on the grid size (cells).
+    pub max_cells: usize,
+    /// A cell without votes of its own is decided by its neighbours only
+    /// inside a region (voted cells on opposite sides), never at its edge:
+    /// the 3 x 3 majority otherwise grows every pane by a cell (0.2 m)
+    /// beyond its last vote, over the wall around a whiteboard or a
+    /// screen.
+    pub fill_between_votes_only: bool,
+    /// Beams through the plane within this angle of its normal that bring
+    /// no echo from it are bare passes, degrees (0: off): glass and mirrors
+    /// return a strong specular echo there, openings none.
+    pub bare_pass_max_deg: f64,
+    /// A transparent cell with at least this many bare passes over it and
+    /// its neighbours, and no surface echo among them, is an opening (the
+    /// wall between two screens on one plane, the gap beside a pane).
+    pub min_bare_passes: u32,
+    /// A surface echo votes "glass" only if the surface around it (its
+    /// neighbours in the scan) is within this angle of the plane, degrees
+    /// (0: no test). Where another pane or a wall cuts the plane, its echoes
+    /// lie on the plane along the line of the cut; without this test they
+    /// grow a phantom pane around that line.
+    pub echo_normal_max_deg: f64,
+    /// An echo on the plane that lies on another reflective landmark too
+    /// (within its surface band, inside its boundary) votes only for the
+    /// one its beam meets nearer normal incidence: glass echoes peak there,
+    /// so where two panes cut each other the echoes are the facing pane's.
+    pub echo_owner_test: bool,
+    /// Where the sensor's path crosses the landmark's plane, the plane is
+    /// open: cells within this horizontal distance of the crossing, from
+    /// the ground up to this far above it, are an opening (a door the
+    /// sensor passed through, not glass), m (0: off). Assumes the world's
+    /// z axis points up.
+    pub crossing_radius: f64,
+    /// Only beams that meet the plane before any other reflective landmark
+    /// vote: past a window or mirror a reflected echo with a transmitted
+    /// return behind it looks like glass on any plane (see
+    /// [`direct`](super::direct)).
+    pub direct_only: bool,
+}
+
+impl Default for EvidenceParams {
+    fn default() -> Self {
+        Self {
+            cell: 0.2,
+            margin: 1.5,
+            min_votes: 3,
+            surface_band: 0.1,
+            behind: 0.1,
+            pass_margin: 0.15,
+            opaque_intensity_ratio: 3.0,
+            peak_angle_deg: 5.0,
+            weak_single_echo_votes: false,
+            min_echo_fraction: 0.0,
+            echo_reach: 0.0,
+            max_cells: 4_000_000,
+            fill_between_votes_only: false,
+            bare_pass_max_deg: 0.0,
+            min_bare_passes: 0,
+            echo_normal_max_deg: 0.0,
+            echo_owner_test: false,
+            crossing_radius: 0.0,
+            direct_only: false,
+        }
+    }
+}
+
+/// One frame to gather evidence from.
+#[derive(Debug, Clone, Copy)]
+pub struct EvidenceFrame<'a> {
+    /// The frame (sensor-frame points).
+    pub frame: &'a Frame,
+    /// Its organized scan (return pairing).
+    pub scan: &'a OrganizedScan,
+    /// `T_world_sensor`.
+    pub pose: Isometry3<f64>,
+}
+
+/// Evidence for `landmark` (world frame) over `frames`; `None` when the
+/// landmark has no usable boundary extent.
+pub fn gather_evidence(
+    landmark: &BoundedPlane,
+    frames: &[EvidenceFrame<'_>],
+    params: &EvidenceParams,
+) -> Option<EvidenceGrid> {
+    let gatherer = EvidenceGatherer::new(landmark, params)?;
+    let votes: Vec<FrameVotes> = frames.par_iter().map(|f| gatherer.votes(f)).collect();
+    let mut total = gatherer.total();
+    for v in votes {
+        total.add(v);
+    }
+    Some(total.finish())
+}
+
+/// Gathers one landmark's evidence frame by frame, so a sequence is read
+/// once and never held: [`votes`](Self::votes) reads a frame (in parallel
+/// with others), [`EvidenceTotal::add`] sums the votes. What the total
+/// keeps grows with the grid and the distinct echo intensities (a few
+/// hundred for a sensor that reports whole numbers), not with the frames.
+#[derive(Debug, Clone)]
+pub struct EvidenceGatherer {
+    landmark: BoundedPlane,
+    /// The other reflective landmarks (world frame), for the owner test.
+    others: Vec<BoundedPlane>,
+    empty: EvidenceGrid,
+    params: EvidenceParams,
+}
+
+/// One frame's votes for one landmark.
+#[derive(Debug)]
+pub struct FrameVotes {
+    grid: EvidenceGrid,
+    votes: Votes,
+}
+
+/// The votes of a landmark summed over the frames so far.
+#[derive(Debug, Clone)]
+pub struct EvidenceTotal {
+    grid: EvidenceGrid,
+    params: EvidenceParams,
+    /// Intensities of surface echoes with a return behind the plane.
+    glass_echoes: IntensityCounts,
+    /// Single echoes on the plane: count per (cell, intensity bits).
+    single_echoes: BTreeMap<(usize, u32), u32>,
+}
+
+impl EvidenceGatherer {
+    /// A gatherer for `landmark` (world frame); `None` when it has no
+    /// usable boundary extent.
+    pub fn new(landmark: &BoundedPlane, params: &EvidenceParams) -> Option<Self> {
+        let vs = landmark.boundary.vertices();
+        let (mut lo, mut hi) = (
+            Point2::new(f64::INFINITY, f64::INFINITY),
+            Point2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+        );
+        for v in vs {
+            lo = Point2::new(lo.x.min(v.x), lo.y.min(v.y));
+            hi = Point2::new(hi.x.max(v.x), hi.y.max(v.y));
+        }
+        let m = params.margin;
+        let mut empty = EvidenceGrid::new(
+            Point2::new(lo.x - m, lo.y - m),
+            Point2::new(hi.x + m, hi.y + m),
+            params.cell,
+            params.min_votes,
+            params.max_cells,
+        )?;
+        empty.min_echo_fraction = params.min_echo_fraction;
+        empty.echo_reach = params.echo_reach;
+        empty.fill_between_votes_only = params.fill_between_votes_only;
+        empty.min_bare_passes = if params.bare_pass_max_deg > 0.0 {
+            params.min_bare_passes
+        } else {
+            0
+        };
+        Some(Self {
+            landmark: landmark.clone(),
+            others: Vec::new(),
+            empty,
+            params: *params,
+        })
+    }
+
+    /// The same gatherer aware of the other reflective landmarks (world
+    /// frame) that an echo on this one's plane may belong to
+    /// ([`EvidenceParams::echo_owner_test`]) or a beam may pass before it
+    /// ([`EvidenceParams::direct_only`]).
+    pub fn with_others(mut self, others: &[BoundedPlane]) -> Self {
+        if self.params.echo_owner_test || self.params.direct_only {
+            self.others = others.to_vec();
+        }
+        self
+    }
+
+    /// One frame's votes.
+    pub fn votes(&self, f: &EvidenceFrame<'_>) -> FrameVotes {
+        let mut grid = self.empty.empty_like();
+        let to_sensor = f.pose.inverse();
+        let others: Vec<BoundedPlane> = self
+            .others
+            .iter()
+            .map(|o| o.transformed(&to_sensor))
+            .collect();
+        let votes = vote_frame(
+            &mut grid,
+            &self.landmark.transformed(&to_sensor),
+            &others,
+            f,
+            &self.params,
+        );
+        FrameVotes { grid, votes }
+    }
+
+    /// An empty total to add frames' votes to.
+    pub fn total(&self) -> EvidenceTotal {
+        EvidenceTotal {
+            grid: self.empty.clone(),
+            params: self.params,
+            glass_echoes: IntensityCounts::default(),
+            single_echoes: BTreeMap::new(),
+        }
+    }
+}
+
+impl EvidenceTotal {
+    /// Add one frame's votes (the order of frames does not matter).
+    pub fn add(&mut self, v: FrameVotes) {
+        self.grid.add(&v.grid);
+        for x in v.votes.glass_echo_intensity {
+            self.glass_echoes.add(x);
+        }
+        for (uv, intensity) in v.votes.single_echoes {
+            if let Some(k) = self.grid.index(&uv) {
+                *self
+                    .single_echoes
+                    .entry((k, intensity.to_bits()))
+                    .or_insert(0) += 1;
+            }
+        }
+    }
+
+    /// The landmark's evidence grid, decided.
+    pub fn finish(self) -> EvidenceGrid {
+        let Self {
+            mut grid,
+            params,
+            glass_echoes,
+            single_echoes,
+        } = self;
+        // Single echoes on the plane: opaque when brighter than the
+        // landmark's glass echoes by the ratio, glass otherwise (all opaque
+        // when the landmark has no dual-return glass echo to compare with).
+        let glass_median = glass_echoes.median();
+        grid.glass_echo_intensity = glass_median.map(|m| m as f32);
+        let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);
+        grid.opaque_intensity = threshold.map(|t| t as f32);
+        grid.peak_cos = params.peak_angle_deg.to_radians().cos();
+        for ((k, bits), n) in single_echoes {
+            let intensity = f32::from_bits(bits);
+            match threshold {
+                Some(th) if (intensity as f64) <= th => {
+                    if params.weak_single_echo_votes {
+                        grid.vote_echo_at(k, n)
+                    }
+                }
+                _ => grid.vote_at(k, 0, n),
+            }
+        }
+        grid.finalize();
+        grid
+    }
+}

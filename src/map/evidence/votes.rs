@@ -1,0 +1,210 @@
+//! One frame's votes for one landmark: beams that cross the plane and
+//! return from behind it, surface echoes with a return behind them, and
+//! single echoes on the plane, whose weighing needs the whole sequence (the
+//! landmark's glass echo intensity), kept as exact intensity counts.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Point2, Point3};
+
+use super::{EvidenceFrame, EvidenceParams};
+use crate::geometry::grid::EvidenceGrid;
+use crate::map::direct::passed_another;
+use crate::reflect::BoundedPlane;
+
+/// Votes of one frame that need the whole sequence to be weighed.
+#[derive(Debug, Default)]
+pub(super) struct Votes {
+    /// Intensities of surface echoes with a return behind the plane.
+    pub(super) glass_echo_intensity: Vec<f32>,
+    /// Single echoes on the plane: chart position and intensity.
+    pub(super) single_echoes: Vec<(Point2<f64>, f32)>,
+}
+
+/// A multiset of intensities, counted per distinct value: its median is
+/// exact, and its size is the number of distinct values, not of echoes.
+#[derive(Debug, Clone, Default)]
+pub(super) struct IntensityCounts {
+    /// Count per value, keyed in `f32::total_cmp` order.
+    counts: BTreeMap<i32, u64>,
+    len: u64,
+}
+
+impl IntensityCounts {
+    pub(super) fn add(&mut self, x: f32) {
+        *self.counts.entry(total_order_key(x)).or_insert(0) += 1;
+        self.len += 1;
+    }
+
+    /// The value at position `len / 2` in sorted order (the upper median
+    /// for an even count), `None` when empty.
+    pub(super) fn median(&self) -> Option<f64> {
+        let mid = self.len / 2;
+        let mut seen = 0;
+        for (&key, &n) in &self.counts {
+            seen += n;
+            if seen > mid {
+                return Some(from_total_order_key(key) as f64);
+            }
+        }
+        None
+    }
+}
+
+/// A key whose integer order is `f32::total_cmp`'s order.
+fn total_order_key(x: f32) -> i32 {
+    let bits = x.to_bits() as i32;
+    bits ^ (((bits >> 31) as u32) >> 1) as i32
+}
+
+/// The inverse of [`total_order_key`].
+fn from_total_order_key(key: i32) -> f32 {
+    f32::from_bits((key ^ (((key >> 31) as u32) >> 1) as i32) as u32)
+}
+
+/// Add one frame's transparent votes and collect its echoes on the plane;
+/// `plane` is the landmark in the frame's sensor frame (same chart
+/// coordinates as the grid).
+pub(super) fn vote_frame(
+    grid: &mut EvidenceGrid,
+    plane: &BoundedPlane,
+    others: &[BoundedPlane],
+    f: &EvidenceFrame<'_>,
+    p: &EvidenceParams,
+) -> Votes {
+    let origin = Point3::origin();
+    let cos_peak = p.peak_angle_deg.to_radians().cos();
+    let bare_cos = (p.bare_pass_max_deg > 0.0).then(|| p.bare_pass_max_deg.to_radians().cos());
+    let echo_normal_cos =
+        (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
+    // Whether the echo at `x` (beam `dir`) lies on another landmark that
+    // its beam meets nearer normal incidence.
+    let owned_by_other = |x: &Point3<f64>, dir: &nalgebra::Vector3<f64>| {
+        let here = plane.plane.normal.dot(dir).abs();
+        p.echo_owner_test
+            && others.iter().any(|o| {
+                o.plane.signed_distance(x).abs() <= p.surface_band
+                    && o.plane.normal.dot(dir).abs() > here
+                    && o.bounds_2d(&o.chart.to_2d(x), 0.0)
+            })
+    };
+    // Whether the surface around point `i` crosses the plane rather than
+    // lying on it (unknown surfaces do not).
+    let crosses = |i: usize| {
+        echo_normal_cos.is_some_and(|c| {
+            f.scan
+                .local_normal(f.frame, i)
+                .is_some_and(|n| n.dot(&plane.plane.normal).abs() < c)
+        })
+    };
+    let mut votes = Votes::default();
+    // A point on the sensor's side of the plane lies at least its distance
+    // from the plane in front of the crossing along its beam (|r - t| >=
+    // |n·x + d|): farther than the surface band it casts no vote, which one
+    // dot product tells without the crossing (the 1e-9 covers round-off).
+    let d = plane.plane.d;
+    let skip_front = p.behind >= 0.0;
+    for (i, pt) in f.frame.points.iter().enumerate() {
+        let x = pt.position();
+        let sd = plane.plane.signed_distance(&x);
+        if skip_front && sd * d > 0.0 && sd.abs() > p.surface_band + 1e-9 {
+            continue;
+        }
+        let r = x.coords.norm();
+        if !(r > 0.0) {
+            continue;
+        }
+        let dir = x.coords / r;
+        let Some(t) = plane.plane.ray_intersection(&origin, &dir) else {
+            continue;
+        };
+        let uv = plane.chart.to_2d(&(origin + dir * t));
+        if grid.index(&uv).is_none()
+            || (p.direct_only && passed_another(others, &dir, t, p.surface_band))
+        {
+            continue;
+        }
+        let s = r - t;
+        if s > p.behind {
+            // A beam through the plane: glass, or open space where the plane
+            // has no surface at all. Only near the landmark's own boundary
+            // (where dual returns found the surface) does it count.
+            if plane.boundary.signed_distance(&uv) <= p.pass_margin {
+                grid.vote(&uv, 1, 0);
+            } else {
+                grid.vote_open(&uv);
+            }
+            // Near normal incidence without an echo from the plane: bare.
+            if bare_cos.is_some_and(|c| plane.plane.normal.dot(&dir).abs() >= c) {
+                let echoed = f
+                    .scan
+                    .partner(i)
+                    .is_some_and(|j| (f.frame.points[j].range() - t).abs() <= p.surface_band);
+                if !echoed {
+                    grid.vote_bare(&uv);
+                }
+            }
+        } else if s.abs() <= p.surface_band {
+            match f.scan.partner(i) {
+                // A surface echo with a return behind the plane: glass.
+                Some(j)
+                    if f.frame.points[j].range() - t > p.behind
+                        && !crosses(i)
+                        && !owned_by_other(&x, &dir) =>
+                {
+                    grid.vote_echo(&uv);
+                    votes.glass_echo_intensity.push(pt.intensity);
+                }
+                Some(_) => {}
+                // The beam ended on the plane.
+                None => {
+                    if plane.plane.normal.dot(&dir).abs() < cos_peak {
+                        votes.single_echoes.push((uv, pt.intensity));
+                    }
+                }
+            }
+        }
+    }
+    votes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The median of the whole multiset, as the in-memory gathering took it.
+    fn median_of_all(v: &mut [f32]) -> Option<f64> {
+        if v.is_empty() {
+            return None;
+        }
+        let mid = v.len() / 2;
+        v.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+        Some(v[mid] as f64)
+    }
+
+    proptest! {
+        /// Counting intensities per distinct value gives exactly the median
+        /// of all of them, for whole-number and fractional intensities.
+        #[test]
+        fn counted_median_is_the_median_of_all(
+            whole in proptest::collection::vec(0u8..=255, 0..300),
+            fractional in proptest::collection::vec(-5.0f32..300.0, 0..50),
+        ) {
+            let mut all: Vec<f32> = whole.iter().map(|&x| x as f32).collect();
+            all.extend(&fractional);
+            let mut counts = IntensityCounts::default();
+            for &x in &all {
+                counts.add(x);
+            }
+            prop_assert_eq!(counts.median(), median_of_all(&mut all));
+        }
+
+        /// The order key sorts like `f32::total_cmp` and round-trips.
+        #[test]
+        fn order_key_sorts_like_total_cmp(a in any::<f32>(), b in any::<f32>()) {
+            prop_assert_eq!(total_order_key(a).cmp(&total_order_key(b)), a.total_cmp(&b));
+            prop_assert_eq!(from_total_order_key(total_order_key(a)).to_bits(), a.to_bits());
+        }
+    }
+}
