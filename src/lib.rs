@@ -19,6 +19,7 @@
 //! | [`frontend`] | ordinary and ground planes of one scan (`PlaneExtractor`) |
 //! | [`backend`] | sparse pose-plane factor graph: Gauss–Newton / Levenberg–Marquardt on faer, the paper's average |
 //! | [`registration`] | plane matching, mismatch rejection (`MismatchRejector`), closed form and Gauss–Newton |
+//! | [`map`] | the global plane map: landmarks, merging, transparency evidence, panes |
 //! | [`slam`] | scan-to-map tracking, degeneracy handling, map update |
 //! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
 //! | [`eval`] | the paper's metrics: precision, recall, IoU, removal rate |
@@ -26,6 +27,7 @@
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |
 //! | [`viz`] | Foxglove MCAP recordings, PNG plots, Markdown report |
+//! | [`logging`], [`progress`] | what a command shows on stderr: its log and progress bars |
 //!
 //! The paper's experiments beside its published tables are not in this
 //! crate: they use it from the workspace member `specular-paper`
@@ -48,6 +50,7 @@ pub mod eval;
 pub mod frontend;
 pub mod geometry;
 pub mod io;
+pub mod logging;
 pub mod map;
 pub mod pipeline;
 pub mod progress;

@@ -90,7 +90,7 @@ pub(crate) fn load_config(name_or_path: &str) -> Result<Config> {
 /// Parse the command line and run the subcommand.
 pub fn run() -> Result<()> {
     let cli = Cli::parse();
-    init_logging(cli.verbose);
+    specular::logging::init(cli.verbose);
     specular::progress::set_enabled(!cli.quiet && std::io::stderr().is_terminal());
     match cli.command {
         Command::Detect(args) => detect::run(args),
@@ -111,23 +111,6 @@ pub fn run() -> Result<()> {
             Ok(())
         }
     }
-}
-
-/// `tracing` logs on stderr: warnings by default, `-v` info, `-vv` debug;
-/// a `RUST_LOG` filter takes precedence.
-fn init_logging(verbose: u8) {
-    let level = match verbose {
-        0 => "warn",
-        1 => "info",
-        _ => "debug",
-    };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::stderr().is_terminal())
-        .try_init();
 }
 
 /// The repository's bundled real sample (for `demo` and the docs).

@@ -113,7 +113,7 @@ fn command_line(args: &ReproduceArgs) -> String {
 
 fn main() -> std::process::ExitCode {
     let args = ReproduceArgs::parse();
-    init_logging(args.verbose);
+    specular::logging::init(args.verbose);
     specular::progress::set_enabled(!args.quiet && std::io::stderr().is_terminal());
     match run(args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -122,23 +122,6 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
-}
-
-/// `tracing` logs on stderr, as the `specular` command does: warnings by
-/// default, `-v` info, `-vv` debug; a `RUST_LOG` filter takes precedence.
-fn init_logging(verbose: u8) {
-    let level = match verbose {
-        0 => "warn",
-        1 => "info",
-        _ => "debug",
-    };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(filter)
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::stderr().is_terminal())
-        .try_init();
 }
 
 /// Run the reproduction.
