@@ -2,6 +2,8 @@
 //! that agree with the truth, a wrong candidate is rejected by the
 //! verification, and the switch turns it off.
 
+mod common;
+
 use nalgebra::Isometry3;
 use specular::config::Config;
 use specular::frontend::FramePlane;
@@ -9,21 +11,7 @@ use specular::pipeline::registry::{detector, extractor, rejector};
 use specular::pipeline::slam::frame_features;
 use specular::pipeline::{optimize_tracked, track_sequence, Sequence};
 use specular::sensor::SensorModel;
-use specular::sim::{self, Scene};
 use specular::slam::loop_closure::{LoopRejection, Pair, Verifier};
-
-/// Frames `frames` of a built-in scene with their true poses.
-fn subset(scene: &str, frames: impl Iterator<Item = usize>) -> Sequence {
-    let scene = Scene::resolve(scene).unwrap();
-    let sim = sim::Simulator::new(&scene);
-    let (frames, poses) = frames
-        .map(|k| {
-            let f = sim.frame(k, scene.seed);
-            (f.frame, f.pose.pose)
-        })
-        .unzip();
-    Sequence::from_frames(frames, Some(poses), "simulated").unwrap()
-}
 
 /// The office walked twice round: loops are closed, each loop's measured
 /// relative pose agrees with the truth within 2 cm and 0.5 degrees, and
@@ -31,7 +19,7 @@ fn subset(scene: &str, frames: impl Iterator<Item = usize>) -> Sequence {
 /// `[slam.loop_closure] enabled = false` no loop is closed.
 #[test]
 fn office_revisits_close_loops_that_agree_with_the_truth() {
-    let seq = subset("office", 0..600);
+    let seq = common::simulated_subset("office", 0..600);
     let truth = seq.poses.clone().unwrap();
     let config = Config::resolve("default").unwrap();
     assert!(config.slam.loop_closure.enabled);
@@ -104,7 +92,7 @@ fn planes(seq: &Sequence, k: usize, config: &Config) -> Vec<FramePlane> {
 /// priors a few centimetres off, are accepted and corrected.
 #[test]
 fn a_wrong_candidate_in_a_corridor_is_rejected_by_verification() {
-    let seq = subset("corridor", [100, 130].into_iter());
+    let seq = common::simulated_subset("corridor", [100, 130].into_iter());
     let config = Config::resolve("default").unwrap();
     let truth = seq.poses.clone().unwrap();
     let a = planes(&seq, 0, &config);
@@ -133,7 +121,7 @@ fn a_wrong_candidate_in_a_corridor_is_rejected_by_verification() {
         assert!(*free >= 1);
     }
     // Wrong too: an office frame as the candidate of another 1.5 m away.
-    let office = subset("office", [40, 85].into_iter());
+    let office = common::simulated_subset("office", [40, 85].into_iter());
     let otruth = office.poses.clone().unwrap();
     assert!((otruth[0].inverse() * otruth[1]).translation.vector.norm() > 1.0);
     let (o0, o1) = (planes(&office, 0, &config), planes(&office, 1, &config));

@@ -19,21 +19,6 @@ fn simulated(scene: &str, frames: usize) -> Sequence {
     Sequence::from_frames(run.frames, Some(poses), "simulated").unwrap()
 }
 
-/// The frames `frames` (indices of the scene's 10 Hz sequence, with their
-/// timestamps) of a built-in scene, with their true poses: a subset of
-/// them is what a sensor that dropped frames delivers.
-fn simulated_subset(scene: &str, frames: impl Iterator<Item = usize>) -> Sequence {
-    let scene = Scene::resolve(scene).unwrap();
-    let sim = sim::Simulator::new(&scene);
-    let (frames, poses) = frames
-        .map(|k| {
-            let f = sim.frame(k, scene.seed);
-            (f.frame, f.pose.pose)
-        })
-        .unzip();
-    Sequence::from_frames(frames, Some(poses), "simulated").unwrap()
-}
-
 #[test]
 fn office_trajectory_is_accurate() {
     let seq = simulated("office", 40);
@@ -180,7 +165,7 @@ fn points_fix_what_the_planes_leave_free_in_a_corridor() {
 /// gap and track as well.
 #[test]
 fn a_gap_is_bridged_over_its_real_duration_and_reported() {
-    let seq = simulated_subset("corridor", (0..60).filter(|k| !(30..35).contains(k)));
+    let seq = common::simulated_subset("corridor", (0..60).filter(|k| !(30..35).contains(k)));
     let truth = seq.poses.clone().unwrap();
     let config = Config::resolve("default").unwrap();
     let out = run_slam(&seq, &config, Some(truth[0])).unwrap();
@@ -203,7 +188,7 @@ fn a_gap_is_bridged_over_its_real_duration_and_reported() {
     let after = (out.tracked_poses[30].translation.vector - truth[30].translation.vector).norm();
     assert!(after < 0.05, "{after}");
 
-    let slow = simulated_subset("corridor", (0..80).step_by(2));
+    let slow = common::simulated_subset("corridor", (0..80).step_by(2));
     let truth = slow.poses.clone().unwrap();
     let out = run_slam(&slow, &config, Some(truth[0])).unwrap();
     assert!(out.reports.iter().all(|r| !r.timing.gap));
@@ -224,7 +209,7 @@ fn a_gap_is_bridged_over_its_real_duration_and_reported() {
 /// tens of degrees away (reported) and the track holds.
 #[test]
 fn a_turn_during_a_gap_is_found_by_the_heading_search() {
-    let seq = simulated_subset(
+    let seq = common::simulated_subset(
         "mirror-room",
         (280..340).filter(|k| !(314..319).contains(k)),
     );

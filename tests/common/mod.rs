@@ -4,6 +4,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use specular::pipeline::Sequence;
+use specular::sim::{Scene, Simulator};
+
 /// The bundled real sample (always present).
 pub fn sample_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("datasets/3dref-sample")
@@ -67,4 +70,19 @@ pub fn copy_dir(from: &Path, to: &Path) {
         let e = e.unwrap();
         std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
     }
+}
+
+/// The frames `frames` (indices of the scene's 10 Hz sequence, with their
+/// timestamps) of a built-in scene, with their true poses: a subset of
+/// them is what a sensor that dropped frames delivers.
+pub fn simulated_subset(scene: &str, frames: impl Iterator<Item = usize>) -> Sequence {
+    let scene = Scene::resolve(scene).unwrap();
+    let sim = Simulator::new(&scene);
+    let (frames, poses) = frames
+        .map(|k| {
+            let f = sim.frame(k, scene.seed);
+            (f.frame, f.pose.pose)
+        })
+        .unzip();
+    Sequence::from_frames(frames, Some(poses), "simulated").unwrap()
 }
