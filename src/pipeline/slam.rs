@@ -4,10 +4,15 @@
 //!
 //! 1. Front end, per frame and in parallel (it does not depend on the
 //!    pose): organize the scan, detect the reflective planes, extract the
-//!    ground and ordinary planes from the filtered cloud.
+//!    ground and ordinary planes from the filtered cloud
+//!    ([`frame_features`]).
 //! 2. Tracking, in timestamp order ([`Tracker`]): predict, register to the
-//!    previous frame, register to the map, update the map.
-//! 3. Classification: the plane-optimized pipeline run with the estimated
+//!    previous frame, register to the map, update the map, close loops
+//!    ([`track_sequence`]).
+//! 3. Back-end: the whole pose-plane graph of tracking solved at once by
+//!    the configured [`Backend`], then the frames between keyframes placed
+//!    against the solved planes ([`optimize_tracked`]).
+//! 4. Classification: the plane-optimized pipeline run with the estimated
 //!    poses ([`classify_with_poses`]).
 
 use std::time::{Duration, Instant};
@@ -112,7 +117,9 @@ pub fn run_slam(
     origin: Option<Isometry3<f64>>,
 ) -> Result<SlamOutput> {
     let wall = Instant::now();
+    // 1-2. Front end and tracking, frame by frame.
     let tracked = track_sequence(sequence, config, origin)?;
+    // 3. The batch back-end over the whole pose-plane graph.
     let mut out = optimize_tracked(tracked, config)?;
     out.timings.wall = wall.elapsed();
     Ok(out)
@@ -130,16 +137,7 @@ pub fn track_sequence(
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
     let mut timings = StageTimings::default();
-    let mut tracker = Tracker::new(
-        config.slam,
-        rejector(config),
-        merger(config),
-        origin.unwrap_or_else(Isometry3::identity),
-    )
-    .with_window(
-        backend(config.backend.name, &config.backend)?,
-        config.backend,
-    );
+    let mut tracker = new_tracker(config, origin)?;
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
     let mut second_returns = 0;
@@ -200,6 +198,22 @@ pub fn track_sequence(
     })
 }
 
+/// The tracker of `config` (its rejector, merger and, when configured,
+/// sliding-window back-end), the first frame at `origin` (identity when
+/// `None`).
+fn new_tracker(config: &Config, origin: Option<Isometry3<f64>>) -> Result<Tracker> {
+    Ok(Tracker::new(
+        config.slam,
+        rejector(config),
+        merger(config),
+        origin.unwrap_or_else(Isometry3::identity),
+    )
+    .with_window(
+        backend(config.backend.name, &config.backend)?,
+        config.backend,
+    ))
+}
+
 /// What tracking alone produced, before the batch back-end.
 #[derive(Debug, Clone)]
 pub struct Tracked {
@@ -216,9 +230,9 @@ pub struct Tracked {
 }
 
 /// Run the batch back-end of `config` on a tracking result (step 3: the
-/// whole pose-plane graph at once). Tracking does
-/// not depend on the back-end unless a sliding window is configured, so
-/// back-ends can be compared on one tracking run by cloning it.
+/// whole pose-plane graph at once). Tracking does not depend on the
+/// back-end unless a sliding window is configured, so back-ends can be
+/// compared on one tracking run by cloning it.
 pub fn optimize_tracked(tracked: Tracked, config: &Config) -> Result<SlamOutput> {
     let named = || backend(config.backend.name, &config.backend);
     optimize_tracked_with(tracked, config, &named)
@@ -257,8 +271,11 @@ pub fn optimize_tracked_with(
             .merged
             .len()
     };
+    // The pose-plane graph of tracking: its observations, odometry and loops.
     let graph = tracking_graph(&log, &map, &config.backend)?;
+    // Solve it at once; the map's planes move to the result.
     let (mut optimized, report) = optimize_batch(&graph, &mut map, make, &poses)?;
+    // The frames between keyframes, placed against the solved planes.
     if report.is_some() {
         place_between_keyframes(&log, &map, &config.backend, make, &mut optimized)?;
     }
