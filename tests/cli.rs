@@ -609,3 +609,71 @@ fn an_unlabelled_run_reports_its_predicted_classes() {
     assert_eq!(sum, total);
     assert!(predicted["normal"].as_u64().unwrap() > 0);
 }
+
+/// `--scene` runs a simulated scene in memory with its true poses: `detect`
+/// needs no pose file and scores against the scene's labels, `slam` scores
+/// its trajectory against the scene's poses; a pose file beside it, or an
+/// unknown scene, is a clear error.
+#[test]
+fn a_simulated_scene_is_an_input_of_detect_and_slam() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("detect");
+    let o = specular(&[
+        "detect",
+        "--scene",
+        "two-panes",
+        "--scene-frames",
+        "6",
+        "--out",
+        s(&out),
+        "--lean",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let metrics = std::fs::read_to_string(out.join("metrics.json")).unwrap();
+    assert!(metrics.contains("\"miou\""), "{metrics}");
+    assert_eq!(
+        std::fs::read_dir(out.join("predictions")).unwrap().count(),
+        6
+    );
+
+    let slam = tmp.path().join("slam");
+    let o = specular(&[
+        "slam",
+        "--scene",
+        "office",
+        "--scene-frames",
+        "8",
+        "--out",
+        s(&slam),
+        "--no-classify",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let metrics = std::fs::read_to_string(slam.join("metrics.json")).unwrap();
+    assert!(metrics.contains("\"trajectory\""), "{metrics}");
+
+    let poses = common::sample_dir().join("poses.txt");
+    let o = specular(&[
+        "detect",
+        "--scene",
+        "two-panes",
+        "--poses",
+        s(&poses),
+        "--out",
+        s(&tmp.path().join("x")),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--scene brings its true poses"),
+        "{}",
+        stderr(&o)
+    );
+    let o = specular(&[
+        "detect",
+        "--scene",
+        "no-such-scene",
+        "--out",
+        s(&tmp.path().join("y")),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no-such-scene"), "{}", stderr(&o));
+}

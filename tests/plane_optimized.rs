@@ -9,6 +9,7 @@ use specular::classify::Class;
 use specular::cloud::{Frame, Point};
 use specular::config::{Config, Method};
 use specular::io::{self, PlyEncoding, StampedPose};
+use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::{run_plane_optimized, Sequence, StageTimings};
 use specular::sensor::SensorModel;
 
@@ -221,4 +222,34 @@ fn reflections_of_a_box_are_mirrored_back_onto_the_box() {
             "point {i} mirrored to {q}, off the box"
         );
     }
+}
+
+/// A room looking out through a coated window (reflectance 0.3, transmittance
+/// 0.5: its echoes behind it form one strength group) must not be taken for
+/// a mirror. Everything outside mirrors to beyond the room's walls, into
+/// space nobody saw, so no point behind the window has its mirror image in
+/// seen-free space; only the reflected paths through the room's walls show
+/// that the ground and hedge outside are transmitted. With that test off the
+/// window is a mirror and every obstacle behind it a Reflection.
+#[test]
+fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
+    let source = DatasetSource::Simulated {
+        scene: "two-panes".into(),
+        frames: Some(20),
+        seed: None,
+    };
+    let seq = Sequence::from_dataset(registry::dataset(&source).unwrap());
+    let obstacles = |config: &Config| {
+        let out = run_plane_optimized(&seq, config).unwrap();
+        let m = out.run.confusion.unwrap().metrics();
+        (m.class(Class::Obstacle).recall, m.table())
+    };
+    let on = config("default");
+    assert!(on.plane_map.echo_split.mirror_blocked_paths);
+    let (recall, table) = obstacles(&on);
+    assert!(recall > 20.0, "{table}");
+    let mut off = on.clone();
+    off.plane_map.echo_split.mirror_blocked_paths = false;
+    let (recall, table) = obstacles(&off);
+    assert!(recall < 1.0, "{table}");
 }

@@ -107,6 +107,16 @@ pub struct BackendParams {
     pub point_anchor_translation_sigma: f64,
     /// ... and this rotation noise, radians.
     pub point_anchor_rotation_sigma: f64,
+    /// Along the directions a frame-to-frame registration left free (its
+    /// planes did not observe them) and the points did not fix, the
+    /// odometry is the motion model's prediction, not a measurement: its
+    /// factor carries this translation noise there instead of
+    /// `odometry_translation_sigma`, m (0: the odometry's noise in every
+    /// direction). A loop or a point anchor can then move those directions
+    /// where the motion model put them.
+    pub odometry_free_translation_sigma: f64,
+    /// ... and this rotation noise, radians.
+    pub odometry_free_rotation_sigma: f64,
     /// `average`: weight of a landmark after its first observation (paper 3).
     pub average_second_weight: f64,
     /// `average`: cap on a landmark's weight (paper 10).
@@ -128,6 +138,8 @@ impl Default for BackendParams {
             max_observation_rms: 0.0,
             point_anchor_translation_sigma: 0.05,
             point_anchor_rotation_sigma: 0.01,
+            odometry_free_translation_sigma: 0.0,
+            odometry_free_rotation_sigma: 0.0,
             average_second_weight: 3.0,
             average_max_weight: 10.0,
         }
@@ -167,6 +179,14 @@ impl BackendParams {
             (
                 "point_anchor_rotation_sigma",
                 self.point_anchor_rotation_sigma,
+            ),
+            (
+                "odometry_free_translation_sigma",
+                self.odometry_free_translation_sigma,
+            ),
+            (
+                "odometry_free_rotation_sigma",
+                self.odometry_free_rotation_sigma,
             ),
         ] {
             if !(v >= 0.0) || !v.is_finite() {

@@ -223,6 +223,15 @@ impl SpaceMap {
             return Occupancy::Unknown;
         }
         let k = ((clearance * self.inv).ceil() as i64).clamp(1, 4);
+        if self.hit_within(v, k) {
+            return Occupancy::Unknown;
+        }
+        Occupancy::Free
+    }
+
+    /// Whether a voxel within `k` voxels of `v` (each axis) holds a seen
+    /// surface.
+    fn hit_within(&self, v: [i64; 3], k: i64) -> bool {
         let (lo, hi) = (v.map(|c| c - k), v.map(|c| c + k));
         // Brick by brick: at most two per axis, bricks without hits skipped.
         for bz in lo[2] >> SHIFT..=hi[2] >> SHIFT {
@@ -243,7 +252,7 @@ impl SpaceMap {
                             for x in from[0]..=to[0] {
                                 let local = (x | (y << SHIFT) | (z << (2 * SHIFT))) as usize;
                                 if brick.hits[local] > 0 {
-                                    return Occupancy::Unknown;
+                                    return true;
                                 }
                             }
                         }
@@ -251,7 +260,7 @@ impl SpaceMap {
                 }
             }
         }
-        Occupancy::Free
+        false
     }
 
     /// Whether the segment from `a` to `b`, less `margin` metres at each

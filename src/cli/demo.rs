@@ -97,6 +97,9 @@ pub fn run(args: DemoArgs) -> Result<()> {
         frames: Some(sample.join("frames")),
         bag: None,
         topic: None,
+        scene: None,
+        scene_frames: None,
+        seed: None,
     };
     let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;

@@ -72,7 +72,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
     }
     let wall = std::time::Instant::now();
     let poses = args.input.pose_file(args.poses.as_deref());
-    if config.method == Method::PlaneOptimized && poses.is_none() {
+    if config.method == Method::PlaneOptimized && poses.is_none() && !args.input.has_own_poses() {
         bail!("the plane-optimized method needs poses: add --poses FILE (or use --method single-scan)");
     }
     if let Some(p) = poses.as_ref().filter(|p| p.from_release) {

@@ -1,6 +1,6 @@
-//! Where `detect` and `slam` read their frames: a 3DRef frame directory or
-//! a ROS 2 bag. One set of arguments and one way to open them, so both
-//! commands take the same inputs.
+//! Where `detect` and `slam` read their frames: a 3DRef frame directory, a
+//! ROS 2 bag or a simulated scene. One set of arguments and one way to open
+//! them, so both commands take the same inputs.
 
 use std::path::{Path, PathBuf};
 
@@ -11,23 +11,37 @@ use specular::io;
 use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::Sequence;
 
-/// The frames to read: `--frames DIR` or `--bag PATH --topic NAME`.
+/// The frames to read: `--frames DIR`, `--bag PATH --topic NAME` or
+/// `--scene NAME`.
 #[derive(Args, Debug)]
 pub struct InputArgs {
     /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
     /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, poses
     /// from `hesai_pose.txt` unless a pose file is given).
-    #[arg(long, required_unless_present = "bag")]
+    #[arg(long, required_unless_present_any = ["bag", "scene"])]
     pub frames: Option<PathBuf>,
     /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), instead of
     /// `--frames`: a rosbag2 directory (`metadata.yaml` with mcap or sqlite3
     /// storage; split files are read in order), an `.mcap` file or a `.db3`
     /// file. Frames are named by their header stamp in seconds.
-    #[arg(long, conflicts_with = "frames", requires = "topic")]
+    #[arg(long, conflicts_with_all = ["frames", "scene"], requires = "topic")]
     pub bag: Option<PathBuf>,
     /// The bag's point-cloud topic.
     #[arg(long, requires = "bag", conflicts_with = "frames")]
     pub topic: Option<String>,
+    /// A simulated scene instead of recorded frames: a built-in name
+    /// (office, lobby, corridor, mirror-room, glass-loop, ...) or a scene
+    /// TOML file. Frames are made as they are read, nothing is written;
+    /// the scene's true poses (and labels) come with them, as the poses of
+    /// `detect` and the ground truth of `slam`.
+    #[arg(long, conflicts_with_all = ["frames", "bag"])]
+    pub scene: Option<String>,
+    /// Frames of `--scene` (default: the scene's own count).
+    #[arg(long, requires = "scene")]
+    pub scene_frames: Option<usize>,
+    /// Range-noise seed of `--scene` (default: the scene's own).
+    #[arg(long, requires = "scene")]
+    pub seed: Option<u64>,
 }
 
 /// A pose file and where it came from.
@@ -40,12 +54,18 @@ pub struct PoseFile {
 }
 
 impl InputArgs {
-    /// The frame directory or bag given.
+    /// The frame directory, bag or scene given.
     pub fn path(&self) -> &Path {
         self.frames
             .as_deref()
             .or(self.bag.as_deref())
+            .or(self.scene.as_deref().map(Path::new))
             .unwrap_or(Path::new(""))
+    }
+
+    /// Whether the input brings its own (true) poses: a simulated scene.
+    pub fn has_own_poses(&self) -> bool {
+        self.scene.is_some()
     }
 
     /// The pose file: `given`, else a 3DRef release directory's own.
@@ -64,7 +84,8 @@ impl InputArgs {
     }
 
     /// The frames as a sequence, with each frame's pose from `poses` when
-    /// given (matched as `config.input` says). The dataset is chosen by
+    /// given (matched as `config.input` says; a simulated scene brings its
+    /// true poses and takes no pose file). The dataset is chosen by
     /// kind ([`registry::dataset`]); its frames are read pass by pass,
     /// keeping at most `input.frame_cache_mb` of the frames read (a bag is
     /// decoded whole, its frames named by header stamp).
@@ -75,8 +96,18 @@ impl InputArgs {
                 path: bag.clone(),
                 topic: self.topic.clone().unwrap_or_default(),
             },
-            (None, None) => bail!("give --frames DIR or --bag PATH --topic NAME"),
+            (None, None) => match &self.scene {
+                Some(scene) => DatasetSource::Simulated {
+                    scene: scene.clone(),
+                    frames: self.scene_frames,
+                    seed: self.seed,
+                },
+                None => bail!("give --frames DIR, --bag PATH --topic NAME or --scene NAME"),
+            },
         };
+        if self.scene.is_some() && poses.is_some() {
+            bail!("--scene brings its true poses: drop the pose file");
+        }
         let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
             .with_frame_cache(config.input.frame_cache_mb);
         if let Some(path) = poses {

@@ -71,6 +71,17 @@ pub struct EchoSplitParams {
     /// alone when `reflection_is_weaker`: the weak group is the reflections
     /// (anchors that exist must still agree).
     pub orient_without_anchors: bool,
+    /// The mirror test counts as transmitted for sure every point whose
+    /// mirror hypothesis the seen space refutes by either test of the
+    /// decision: the mirror image in seen-free space (an anchor), or the
+    /// reflected path through a seen surface (with the real position not
+    /// refuted). With anchors alone, a room looking out through a window
+    /// has none: everything outside mirrors to beyond the room's walls,
+    /// into space nobody saw, and the window is taken for a mirror. The
+    /// split's orientation keeps the anchors alone: at grazing angles a
+    /// reflected path clips wall voxels, too few to make a window of a
+    /// mirror but enough to outvote a split's anchors.
+    pub mirror_blocked_paths: bool,
 }
 
 impl Default for EchoSplitParams {
@@ -88,6 +99,7 @@ impl Default for EchoSplitParams {
             mirror_min_behind: 1000,
             mirror_needs_one_group: false,
             orient_without_anchors: false,
+            mirror_blocked_paths: false,
         }
     }
 }
@@ -187,7 +199,7 @@ fn centre(bin: usize) -> f64 {
 /// Whether the points behind a landmark say it is a mirror: many points,
 /// and almost none of them transmitted for sure (their mirror image lies in
 /// space seen free).
-pub fn is_mirror(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitParams) -> bool {
+pub fn is_mirror(all: &EchoHistogram, transmitted: u64, p: &EchoSplitParams) -> bool {
     let n = all.total();
     let two_groups = || {
         all.otsu()
@@ -195,7 +207,7 @@ pub fn is_mirror(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitPara
     };
     p.mirror_max_anchor_share > 0.0
         && n >= p.mirror_min_behind
-        && (anchors.total() as f64) <= p.mirror_max_anchor_share * n as f64
+        && (transmitted as f64) <= p.mirror_max_anchor_share * n as f64
         && !(p.mirror_needs_one_group && two_groups())
 }
 
@@ -327,13 +339,13 @@ mod tests {
             ..EchoSplitParams::default()
         };
         let all = histogram((0..5000).map(|k| 2.0 + (k % 50) as f64 * 0.02));
-        assert!(is_mirror(&all, &EchoHistogram::default(), &p));
-        assert!(is_mirror(&all, &histogram([3.0; 10]), &p));
-        assert!(!is_mirror(&all, &histogram([3.0; 50]), &p));
+        assert!(is_mirror(&all, 0, &p));
+        assert!(is_mirror(&all, 10, &p));
+        assert!(!is_mirror(&all, 50, &p));
         let few = histogram([3.0; 500]);
-        assert!(!is_mirror(&few, &EchoHistogram::default(), &p));
+        assert!(!is_mirror(&few, 0, &p));
         let off = EchoSplitParams::default();
-        assert!(!is_mirror(&all, &EchoHistogram::default(), &off));
+        assert!(!is_mirror(&all, 0, &off));
     }
 
     /// Glass behind which the scene is its own mirror image (a door across
@@ -360,9 +372,9 @@ mod tests {
             orient_without_anchors: true,
             ..old
         };
-        assert!(is_mirror(&two, &none, &old));
-        assert!(!is_mirror(&two, &none, &new));
-        assert!(is_mirror(&one, &none, &new));
+        assert!(is_mirror(&two, none.total(), &old));
+        assert!(!is_mirror(&two, none.total(), &new));
+        assert!(is_mirror(&one, none.total(), &new));
         assert_eq!(EchoSplit::fit(&two, &none, &old), None);
         let split = EchoSplit::fit(&two, &none, &new).expect("a split by physics");
         assert!(split.weak_is_reflection);

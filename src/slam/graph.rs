@@ -163,6 +163,14 @@ fn graph_of(
         params.odometry_translation_sigma,
         params.odometry_rotation_sigma,
     );
+    let free_info = (params.odometry_free_translation_sigma > 0.0
+        && params.odometry_free_rotation_sigma > 0.0)
+        .then(|| {
+            diagonal_sqrt_info(
+                params.odometry_free_translation_sigma,
+                params.odometry_free_rotation_sigma,
+            )
+        });
     for pair in frames.windows(2) {
         let (a, b) = (pair[0], pair[1]);
         let mut measured = Isometry3::identity();
@@ -180,6 +188,12 @@ fn graph_of(
         let mut info = odometry_info / ((b - a) as f64).sqrt();
         if fallback {
             info /= FALLBACK_ODOMETRY_SCALE;
+        }
+        if let Some(free_info) = free_info {
+            let free = free_directions(log, a, b);
+            if !free.is_empty() {
+                info = loosen(&info, &(free_info / ((b - a) as f64).sqrt()), &free);
+            }
         }
         graph.add(AnyFactor::Between(Between::new(
             a as u32, b as u32, measured, info,
@@ -263,6 +277,51 @@ fn graph_of(
         .fixed
         .retain(|k| !matches!(k, Key::Plane(_)) || used.contains(k));
     Ok(graph)
+}
+
+/// The directions of the odometry from frame `a` to frame `b` that nothing
+/// measured ([`TrackedFrame::odometry_free`](super::log::TrackedFrame)),
+/// in frame `b`'s tangent: each frame's, moved there by the adjoint of the
+/// tracked motion from it to `b` (`exp(v)` at frame `k` is
+/// `exp(Ad(T_b_k) v)` at `b`), orthonormalised.
+fn free_directions(log: &TrackingLog, a: usize, b: usize) -> Vec<Vector6<f64>> {
+    let mut span = Matrix6::zeros();
+    let mut any = false;
+    for k in a + 1..=b {
+        let f = &log.frames[k];
+        if f.odometry_free.is_empty() {
+            continue;
+        }
+        let to_b = log.frames[b].pose.inverse() * f.pose;
+        let ad = crate::geometry::se3::adjoint(&to_b);
+        for v in &f.odometry_free {
+            let w = ad * v;
+            let n = w.norm();
+            if n > 1e-12 {
+                span += (w / n) * (w / n).transpose();
+                any = true;
+            }
+        }
+    }
+    if !any {
+        return Vec::new();
+    }
+    let eig = nalgebra::SymmetricEigen::new(span);
+    let mut out: Vec<(f64, Vector6<f64>)> = (0..6)
+        .filter(|&k| eig.eigenvalues[k] > 0.5)
+        .map(|k| (eig.eigenvalues[k], eig.eigenvectors.column(k).into_owned()))
+        .collect();
+    out.sort_by(|x, y| y.0.total_cmp(&x.0));
+    out.into_iter().map(|(_, v)| v).collect()
+}
+
+/// `info` (square-root information of a relative pose) with the residual's
+/// components along `free` (orthonormal tangent vectors) whitened by
+/// `free_info` instead: `S (I − P) + S_free P`, `P` the projector onto
+/// `free`.
+fn loosen(info: &Matrix6<f64>, free_info: &Matrix6<f64>, free: &[Vector6<f64>]) -> Matrix6<f64> {
+    let p: Matrix6<f64> = free.iter().map(|v| v * v.transpose()).sum();
+    info * (Matrix6::identity() - p) + free_info * p
 }
 
 /// The point term's measurement of frame `k` as a factor: the tracked
@@ -383,6 +442,7 @@ mod tests {
                 TrackedFrame {
                     pose,
                     odometry: (k > 0).then_some(step),
+                    odometry_free: Vec::new(),
                     keyframe: keyframes.contains(&k),
                     points_anchor: None,
                 }
@@ -474,6 +534,40 @@ mod tests {
             .map(|f| crate::backend::factors::Factor::keys(&f.factor).to_vec())
             .collect();
         assert!(keys.contains(&vec![Key::Pose(1), Key::Pose(5)]), "{keys:?}");
+    }
+
+    /// Along a direction the odometry left free, its factor carries the
+    /// free-direction noise; elsewhere, and with the free sigmas at 0, the
+    /// odometry's.
+    #[test]
+    fn free_odometry_directions_get_the_free_noise() {
+        let mut l = log(3, &[0, 1, 2]);
+        l.frames[2].odometry_free = vec![Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0)];
+        let params = BackendParams {
+            odometry_translation_sigma: 0.01,
+            odometry_free_translation_sigma: 0.5,
+            odometry_free_rotation_sigma: 0.1,
+            ..BackendParams::default()
+        };
+        let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
+        let AnyFactor::Between(f) = &graph.factors[1].factor else {
+            panic!("a relative-pose factor");
+        };
+        assert!((f.sqrt_info[(0, 0)] - 2.0).abs() < 1e-9, "{}", f.sqrt_info);
+        assert!((f.sqrt_info[(1, 1)] - 100.0).abs() < 1e-9);
+        let AnyFactor::Between(first) = &graph.factors[0].factor else {
+            panic!("a relative-pose factor");
+        };
+        assert!((first.sqrt_info[(0, 0)] - 100.0).abs() < 1e-9);
+        let off = BackendParams {
+            odometry_free_translation_sigma: 0.0,
+            ..params
+        };
+        let graph = tracking_graph(&l, &PlaneMap::new(), &off).unwrap();
+        let AnyFactor::Between(f) = &graph.factors[1].factor else {
+            panic!("a relative-pose factor");
+        };
+        assert!((f.sqrt_info[(0, 0)] - 100.0).abs() < 1e-9);
     }
 
     /// Frames between keyframes follow their keyframe's correction.

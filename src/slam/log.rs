@@ -19,6 +19,11 @@ pub struct TrackedFrame {
     /// The frame-to-frame registration `T_previous_current`, when it
     /// succeeded (a relative-pose measurement independent of the map).
     pub odometry: Option<Isometry3<f64>>,
+    /// The directions of `odometry` (orthonormal tangent vectors `(ρ, φ)`,
+    /// this frame's sensor frame) that nothing measured: the
+    /// frame-to-frame registration left them free and the points did not
+    /// fix them, so there the odometry is the motion model's prediction.
+    pub odometry_free: Vec<Vector6<f64>>,
     /// Whether the frame is a keyframe: a pose of the batch back-end's
     /// graph, with its plane observations logged.
     pub keyframe: bool,

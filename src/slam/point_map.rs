@@ -59,6 +59,10 @@ pub struct PointParams {
     /// along it reaches this (about the number of samples whose surface
     /// faces along it, each weighted by its kernel weight).
     pub min_information: f64,
+    /// Samples take part in the refinement of a free direction only when
+    /// their surface faces along it at least this much (`|n · v|`; see
+    /// [`PointRefineParams::min_alignment`](crate::registration::PointRefineParams::min_alignment)).
+    pub min_alignment: f64,
     /// Samples behind a reflective plane within this margin of its extent
     /// are left out (they may be mirror images), m.
     pub reflective_margin: f64,
@@ -77,6 +81,7 @@ impl Default for PointParams {
             kernel_scale: 0.05,
             max_iterations: 10,
             min_information: 20.0,
+            min_alignment: 0.3,
             reflective_margin: 0.5,
         }
     }
@@ -203,6 +208,33 @@ impl LocalPointMap {
                 cell.push((p, frame));
             }
         }
+    }
+
+    /// Add one point (world frame) of frame `frame`.
+    pub fn insert_point(&mut self, p: Point3<f64>, frame: usize) {
+        let cell = self.voxels.entry(voxel_key(&p, self.voxel)).or_default();
+        if cell.len() < self.max_per_voxel {
+            cell.push((p, frame));
+        }
+    }
+
+    /// The points added by frames `frames` (world frame, with their frame),
+    /// in a fixed order (by frame, then coordinates): deterministic.
+    pub fn points_of(&self, frames: std::ops::RangeInclusive<usize>) -> Vec<(Point3<f64>, usize)> {
+        let mut out: Vec<(Point3<f64>, usize)> = self
+            .voxels
+            .values()
+            .flatten()
+            .filter(|(_, f)| frames.contains(f))
+            .copied()
+            .collect();
+        out.sort_by(|a, b| {
+            a.1.cmp(&b.1)
+                .then(a.0.x.total_cmp(&b.0.x))
+                .then(a.0.y.total_cmp(&b.0.y))
+                .then(a.0.z.total_cmp(&b.0.z))
+        });
+        out
     }
 
     /// Move every point by the correction of the frame that added it

@@ -10,7 +10,7 @@ use crate::classify::space::{Occupancy, SensorFrameSpace};
 
 /// What the directly seen space says about a behind-plane point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Verdict {
+pub(crate) enum Verdict {
     /// Only the mirror hypothesis survives: a Reflection.
     Mirror,
     /// Only the real hypothesis survives: an Obstacle seen through glass.
@@ -26,7 +26,7 @@ pub(super) enum Verdict {
 /// through a seen surface (tested from `space_margin` off the plane to
 /// `space_margin` before the endpoint; clearances and support radius from
 /// `params`).
-pub(super) fn two_hypotheses(
+pub(crate) fn two_hypotheses(
     space: &SensorFrameSpace<'_>,
     support: Option<&dyn SurfaceSupport>,
     plane: &crate::geometry::Plane,

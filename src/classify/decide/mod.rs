@@ -50,7 +50,7 @@ mod past_extent;
 mod past_pane;
 
 use self::frame_evidence::{returns_along, NormalPointIndex};
-use self::hypotheses::{two_hypotheses, Verdict};
+pub(crate) use self::hypotheses::{two_hypotheses, Verdict};
 use self::past_extent::{past_seen_extent, through_glass};
 use self::past_pane::past_second_pane;
 use super::boundary::{beam_crossing, BeamPlanes};

@@ -10,6 +10,7 @@ use nalgebra::{Isometry3, Point3};
 
 use super::world_maps::rotation_translation;
 use crate::classify::boundary::BeamPlanes;
+use crate::classify::decide::{two_hypotheses, SurfaceSupport, Verdict};
 use crate::classify::{
     BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
@@ -105,7 +106,7 @@ impl<'a> FrameViews<'a> {
         // The landmarks as classified: with their echo splits, when learned.
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
             (Some(space), true) => self
-                .echo_splits(&space_frames, &planes, space, timings)?
+                .echo_splits(&space_frames, &planes, space, support.as_ref(), timings)?
                 .into_iter()
                 .zip(&planes)
                 .map(|((echo_split, mirror), bp)| BoundedPlane {
@@ -289,6 +290,7 @@ impl<'a> FrameViews<'a> {
         frames: &[usize],
         planes: &[BoundedPlane],
         space: &SpaceMap,
+        support: Option<&WorldSupport>,
         timings: &mut StageTimings,
     ) -> Result<Vec<(Option<EchoSplit>, bool)>> {
         let p = self.classifier.params();
@@ -300,7 +302,9 @@ impl<'a> FrameViews<'a> {
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
-        let empty = || vec![(EchoHistogram::default(), EchoHistogram::default()); planes.len()];
+        let blocked_paths = p.echo_split.mirror_blocked_paths;
+        let empty =
+            || vec![(EchoHistogram::default(), EchoHistogram::default(), 0u64); planes.len()];
         let mut totals = empty();
         self.pass(
             frames,
@@ -311,6 +315,8 @@ impl<'a> FrameViews<'a> {
                 let mut out = empty();
                 let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
                 let view = space.in_sensor_frame(inp.pose);
+                let seen = support.map(|s| s.in_sensor_frame(inp.pose));
+                let seen = seen.as_ref().map(|s| s as &dyn SurfaceSupport);
                 let beams = BeamPlanes::hulls(&sensor_planes, p.hull_margin);
                 for (i, pt) in inp.frame.points.iter().enumerate() {
                     let pos = pt.position();
@@ -338,31 +344,45 @@ impl<'a> FrameViews<'a> {
                     // pane's echo, not a surface's: no anchor.
                     let on_other_pane =
                         beams.crosses_between(&pos, h.plane, range - glass, range + glass);
-                    if !on_other_pane
-                        && view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free
-                    {
+                    if on_other_pane {
+                        continue;
+                    }
+                    let anchor =
+                        view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free;
+                    if anchor {
                         out[h.plane].1.add(strength);
                     }
+                    let transmitted = if blocked_paths {
+                        let plane = &sensor_planes[h.plane].plane;
+                        two_hypotheses(&view, seen, plane, &pos, &p.decision) == Verdict::Real
+                    } else {
+                        anchor
+                    };
+                    out[h.plane].2 += u64::from(transmitted);
                 }
                 out
             },
             |frame_counts| {
-                for ((all, anchors), (all_f, anchors_f)) in totals.iter_mut().zip(&frame_counts) {
+                for ((all, anchors, transmitted), (all_f, anchors_f, transmitted_f)) in
+                    totals.iter_mut().zip(&frame_counts)
+                {
                     all.merge(all_f);
                     anchors.merge(anchors_f);
+                    *transmitted += transmitted_f;
                 }
             },
         )?;
         Ok(totals
             .into_iter()
             .enumerate()
-            .map(|(j, (all, anchors))| {
+            .map(|(j, (all, anchors, transmitted))| {
                 let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
-                let mirror = is_mirror(&all, &anchors, &p.echo_split);
+                let mirror = is_mirror(&all, transmitted, &p.echo_split);
                 tracing::debug!(
                     plane = j,
                     behind = all.total(),
                     anchors = anchors.total(),
+                    transmitted,
                     ?split,
                     mirror,
                     "echo split"

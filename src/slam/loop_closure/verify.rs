@@ -99,22 +99,22 @@ pub struct Verifier<'a> {
     pub inlier_cos: f64,
     /// Inlier offset of a pair, m.
     pub inlier_offset: f64,
-    /// Point refinement of the directions the planes leave free, with the
-    /// voxel edge and points per voxel of the candidate's point map
-    /// (`None`: planes alone).
-    pub points: Option<(PointRefineParams, f64, usize)>,
+    /// Point refinement of the directions the planes leave free (`None`:
+    /// planes alone).
+    pub points: Option<PointRefineParams>,
 }
 
-/// The two frames' surface samples (sensor frames), for the directions the
-/// planes leave free.
+/// The current frame's surface samples and the candidate's points, for
+/// the directions the planes leave free.
 #[derive(Debug, Clone, Copy)]
 pub struct Samples<'a> {
-    /// The current frame's.
+    /// The current frame's samples (its sensor frame).
     pub current: &'a [SurfaceSample],
-    /// The candidate keyframe's.
-    pub candidate: &'a [SurfaceSample],
-    /// The candidate's frame index.
-    pub candidate_frame: usize,
+    /// The points around the candidate, in the candidate's sensor frame:
+    /// its keyframe's and its neighbours' samples, and the tracker's own
+    /// points of the frames around it where it still holds them (one
+    /// keyframe's samples are too sparse to measure a corridor's axis).
+    pub candidate: &'a LocalPointMap,
 }
 
 /// The current frame and the candidate: planes (sensor frames), the path
@@ -173,18 +173,23 @@ impl Verifier<'_> {
         let mut fixed_by_points = 0;
         let near = prior.translation.vector.norm() <= params.max_point_distance;
         if !free.is_empty() {
-            if let (Some(s), Some((mut point_params, voxel, per_voxel))) =
-                (samples.filter(|_| near), self.points)
-            {
+            if let (Some(s), Some(mut point_params)) = (samples.filter(|_| near), self.points) {
                 point_params.min_information = params.min_point_information;
-                let mut map = LocalPointMap::new(voxel, per_voxel);
-                map.insert(s.candidate, &Isometry3::identity(), s.candidate_frame);
+                point_params.min_alignment = params.min_point_alignment;
+                let map = s.candidate;
                 let refined = refine_free_directions(
                     s.current,
                     |q, d| map.nearest(q, d),
                     &pose,
                     &free,
                     &point_params,
+                );
+                tracing::debug!(
+                    candidate_points = s.candidate.len(),
+                    current = s.current.len(),
+                    correspondences = refined.correspondences,
+                    fixed = refined.fixed,
+                    "loop verification: points"
                 );
                 fixed_by_points = refined.fixed;
                 pose = refined.pose;

@@ -1,17 +1,21 @@
 //! The tracking step: one frame's planes in, its pose and the updated map
 //! out.
+//!
+//! [`Tracker::track_at`] runs the steps in order; the point refinement of
+//! the directions the planes leave free is in [`points`], the back-end
+//! during tracking (sliding window, loop closure, the re-solve at a loop)
+//! in [`loops`].
+
+mod loops;
+mod points;
 
 use nalgebra::{Isometry3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use super::association::{associate, MapMatchParams};
 use super::clock::{FrameClock, FrameTiming};
-use super::graph::{optimized_poses, tracking_graph, update_map, window_graph};
-use super::log::{LandmarkObservation, PointsAnchor, TrackedFrame, TrackingLog};
-use super::loop_closure::{
-    merge_duplicates, LoopClosureParams, LoopConstraint, LoopDetector, LoopMatch, Pair, Samples,
-    Verifier,
-};
+use super::log::{LandmarkObservation, TrackedFrame, TrackingLog};
+use super::loop_closure::{LoopClosureParams, LoopDetector, LoopMatch};
 use super::motion::{MotionModel, MotionParams, MotionUpdate};
 use super::point_map::{LocalPointMap, PointParams, ScanSamples};
 use super::recovery::{recover_heading, RecoveryParams, RegistrationContext};
@@ -19,10 +23,9 @@ use crate::backend::{Backend, BackendParams};
 use crate::frontend::FramePlane;
 use crate::io::PlaneKind;
 use crate::map::{MapMerger, PlaneMap};
-use crate::reflect::BoundedPlane;
 use crate::registration::{
-    match_planes, refine_free_directions, register, Degeneracy, GaussNewtonParams, MatchCriteria,
-    MismatchRejector, PointRefineParams, RejectorParams, SurfaceSample,
+    match_planes, register, Degeneracy, GaussNewtonParams, MatchCriteria, MismatchRejector,
+    RejectorParams, SurfaceSample,
 };
 
 /// Reflection SLAM settings (`[slam]`).
@@ -336,6 +339,7 @@ impl Tracker {
         // 1. Predict (the first frame defines the world frame).
         let mut matched: Vec<Option<usize>> = vec![None; usable.len()];
         let mut odometry = None;
+        let mut odometry_free: Vec<Vector6<f64>> = Vec::new();
         let pose = match (self.motion.predict(dt), &self.previous) {
             (Some(predicted), Some((prev_planes, prev_pose))) => {
                 // 2. Frame-to-frame registration: the initial global pose.
@@ -375,6 +379,7 @@ impl Tracker {
                     if let Some(reg) = f2f {
                         report.frame_inliers = reg.inliers.len();
                         odometry = Some(reg.pose);
+                        odometry_free = reg.refinement.degeneracy.directions().copied().collect();
                         initial = prev_pose * reg.pose;
                     }
                 }
@@ -416,6 +421,9 @@ impl Tracker {
             Some(samples) => {
                 let (refined, anchor) =
                     self.refine_with_points(&planes, samples, pose, index, &mut report);
+                if let Some(a) = &anchor {
+                    odometry_free = points::without_span(&odometry_free, &a.directions);
+                }
                 points_anchor = anchor;
                 if refined != pose {
                     // The frame-to-frame registration left the same
@@ -455,6 +463,11 @@ impl Tracker {
         self.log.frames.push(TrackedFrame {
             pose,
             odometry,
+            odometry_free: if odometry.is_some() {
+                odometry_free
+            } else {
+                Vec::new()
+            },
             keyframe,
             points_anchor,
         });
@@ -477,266 +490,6 @@ impl Tracker {
             }
         }
         report
-    }
-
-    /// Optimise the frames `index + 1 - window ..= index` (the oldest one
-    /// fixed) with the landmarks they observe; the log's poses, the map's
-    /// planes, the previous pose and the motion model take the result.
-    /// Returns the corrected pose of frame `index`; `None` (nothing changed)
-    /// when there is no window back-end or it fails — tracking goes on.
-    fn optimize_window(&mut self, index: usize) -> Option<Isometry3<f64>> {
-        let (solver, params) = self.window.as_ref()?;
-        let start = (index + 1).saturating_sub(self.params.window);
-        let graph = window_graph(&self.log, start..index + 1, &self.map, params).ok()?;
-        let values = match solver.optimize(&graph, &graph.values) {
-            Ok((values, report)) => {
-                tracing::debug!(
-                    frame = index,
-                    iterations = report.iterations,
-                    seconds = report.total_seconds,
-                    setup = report.setup_seconds,
-                    "window"
-                );
-                values
-            }
-            Err(e) => {
-                tracing::debug!(frame = index, "window optimisation failed: {e}");
-                return None;
-            }
-        };
-        for (&k, pose) in &values.poses {
-            if let Some(f) = self.log.frames.get_mut(k as usize) {
-                f.pose = *pose;
-            }
-        }
-        update_map(&mut self.map, &values);
-        let pose = self.log.frames.get(index)?.pose;
-        self.motion.correct(pose);
-        if let Some((_, previous)) = &mut self.previous {
-            *previous = pose;
-        }
-        Some(pose)
-    }
-
-    /// Look for a loop at frame `index` (tracked at `pose`, its planes the
-    /// previous frame's now): when it is a loop keyframe, verify the
-    /// candidates, log the first verified loop, and when that moves the
-    /// estimate by more than `resolve_correction`, re-solve the whole
-    /// graph ([`resolve_all`](Self::resolve_all)). Returns the corrected
-    /// pose of frame `index` when it moved.
-    fn close_loop(
-        &mut self,
-        index: usize,
-        pose: Isometry3<f64>,
-        seed: u64,
-        report: &mut FrameReport,
-    ) -> Option<Isometry3<f64>> {
-        let lc = self.params.loop_closure;
-        let before = index
-            .checked_sub(1)
-            .and_then(|k| self.log.frames.get(k))
-            .map(|f| f.pose);
-        if !self.loops.advance(index, &pose, before.as_ref(), &lc) {
-            return None;
-        }
-        let planes: Vec<FramePlane> = self
-            .previous
-            .as_ref()
-            .map(|(planes, _)| planes.clone())
-            .unwrap_or_default();
-        let frames = &self.log.frames;
-        let candidates = self.loops.candidates(
-            index,
-            &planes,
-            &pose,
-            |k| frames.get(k).map(|f| f.pose),
-            &lc,
-        );
-        let pp = self.params.points;
-        let verifier = Verifier {
-            rejector: self.rejector.as_ref(),
-            gauss_newton: &self.params.gauss_newton,
-            inlier_cos: self.params.rejector.inlier_cos(),
-            inlier_offset: self.params.rejector.inlier_offset,
-            points: pp.enabled.then_some((
-                PointRefineParams {
-                    max_correspondence: pp.max_correspondence,
-                    kernel_scale: pp.kernel_scale,
-                    max_iterations: pp.max_iterations,
-                    min_information: pp.min_information,
-                },
-                pp.map_voxel,
-                pp.max_points_per_voxel,
-            )),
-        };
-        let mut found = None;
-        for c in &candidates {
-            report.loop_candidates += 1;
-            let prior = frames[c.frame].pose.inverse() * pose;
-            let submap = self.loops.submap(c.frame, lc.submap_keyframes, |k| {
-                frames.get(k).map(|f| f.pose)
-            });
-            let samples = Samples {
-                current: &self.clean_samples,
-                candidate: &submap,
-                candidate_frame: c.frame,
-            };
-            let pair = Pair {
-                current: &planes,
-                candidate: c.planes,
-                travelled: self.loops.path_between(c.frame, index),
-                samples: Some(samples),
-            };
-            match verifier.verify(&pair, &prior, &lc, seed ^ (c.frame as u64)) {
-                Ok(m) => {
-                    found = Some((c.frame, m));
-                    break;
-                }
-                Err(why) => {
-                    tracing::debug!(frame = index, candidate = c.frame, ?why, "loop rejected")
-                }
-            }
-        }
-        self.loops
-            .insert(index, &planes, &self.clean_samples, &pose);
-        let (from, check) = found?;
-        tracing::debug!(frame = index, with = from, ?check, "loop closed");
-        for k in [from, index] {
-            if let Some(f) = self.log.frames.get_mut(k) {
-                f.keyframe = true;
-            }
-        }
-        self.log.loops.push(LoopConstraint {
-            from,
-            to: index,
-            relative: check.relative,
-            sqrt_info: lc.sqrt_info(),
-            robust: lc.robust,
-            check: check.clone(),
-        });
-        let resolve = check.correction > lc.resolve_correction;
-        let mut out = LoopReport {
-            with: from,
-            check,
-            resolved: false,
-            merged: 0,
-        };
-        let corrected = if resolve {
-            self.resolve_all(index).map(|(pose, merged)| {
-                out.resolved = true;
-                out.merged = merged;
-                pose
-            })
-        } else {
-            None
-        };
-        report.loop_closure = Some(out);
-        corrected
-    }
-
-    /// Optimise the whole graph so far (with its loop factors) with the
-    /// back-end; every logged pose, the landmarks (planes and boundaries,
-    /// each with the correction of the last frame that saw it), the local
-    /// point map (each point with its frame's correction), the motion model
-    /// and the previous pose take the result; then duplicate landmarks are
-    /// merged. Returns frame `index`'s new pose and the number of merges;
-    /// `None` (nothing changed) without a back-end or when it fails.
-    fn resolve_all(&mut self, index: usize) -> Option<(Isometry3<f64>, usize)> {
-        let (solver, params) = self.window.as_ref()?;
-        let graph = tracking_graph(&self.log, &self.map, params).ok()?;
-        let values = match solver.optimize(&graph, &graph.values) {
-            Ok((values, _)) => values,
-            Err(e) => {
-                tracing::debug!(frame = index, "loop re-solve failed: {e}");
-                return None;
-            }
-        };
-        let old: Vec<Isometry3<f64>> = self.log.frames.iter().map(|f| f.pose).collect();
-        let new = optimized_poses(&values, &old);
-        let corrections: Vec<Isometry3<f64>> =
-            old.iter().zip(&new).map(|(o, n)| n * o.inverse()).collect();
-        for (f, p) in self.log.frames.iter_mut().zip(&new) {
-            f.pose = *p;
-        }
-        for l in &mut self.map.landmarks {
-            if let Some(c) = corrections.get(l.last_frame) {
-                l.plane = l.plane.transformed(c);
-                for v in &mut l.boundary {
-                    *v = c * *v;
-                }
-            }
-        }
-        update_map(&mut self.map, &values);
-        self.points.correct(|k| corrections.get(k).copied());
-        let merged = merge_duplicates(&mut self.map, &mut self.log, &self.params.loop_closure);
-        let pose = *new.get(index)?;
-        self.motion.correct(pose);
-        if let Some((_, previous)) = &mut self.previous {
-            *previous = pose;
-        }
-        if let Some(last) = &mut self.last_keyframe {
-            *last = corrections.get(index).map_or(*last, |c| c * *last);
-        }
-        self.loops.correct_last(&pose);
-        Some((pose, merged.merged.len()))
-    }
-
-    /// Refine the directions of `pose` that the planes left free (per
-    /// `report`'s degeneracy) against the local point map, then add the
-    /// frame's samples to the map; samples behind a reflective plane of the
-    /// frame or of the map are left out of both. Returns the refined pose
-    /// and, when the points fixed some direction, what they measured it
-    /// against; counts the fixed directions in `report`.
-    fn refine_with_points(
-        &mut self,
-        planes: &[FramePlane],
-        samples: &ScanSamples,
-        pose: Isometry3<f64>,
-        index: usize,
-        report: &mut FrameReport,
-    ) -> (Isometry3<f64>, Option<PointsAnchor>) {
-        let pp = self.params.points;
-        let to_sensor = pose.inverse();
-        let reflective: Vec<BoundedPlane> = planes
-            .iter()
-            .filter(|fp| fp.kind == PlaneKind::Reflective)
-            .map(|fp| BoundedPlane::from_points(fp.plane, fp.hull_3d()))
-            .chain(
-                self.map
-                    .landmarks
-                    .iter()
-                    .filter(|l| l.kind == PlaneKind::Reflective)
-                    .map(|l| l.bounded().transformed(&to_sensor)),
-            )
-            .collect();
-        let clean = samples.without_reflections(&reflective, pp.reflective_margin);
-        let mut pose = pose;
-        let mut anchor = None;
-        if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
-            let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
-            let params = PointRefineParams {
-                max_correspondence: pp.max_correspondence,
-                kernel_scale: pp.kernel_scale,
-                max_iterations: pp.max_iterations,
-                min_information: pp.min_information,
-            };
-            let points = &self.points;
-            let refined =
-                refine_free_directions(&clean, |q, d| points.nearest(q, d), &pose, &free, &params);
-            report.fixed_by_points = refined.fixed;
-            pose = refined.pose;
-            anchor = refined.anchor.map(|frame| PointsAnchor {
-                frame,
-                directions: refined.fixed_directions,
-            });
-        }
-        self.points.insert(&clean, &pose, index);
-        if self.params.loop_closure.enabled {
-            self.clean_samples = clean;
-        }
-        self.points
-            .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
-        (pose, anchor)
     }
 
     /// Whether a frame tracked at `pose` is a keyframe: the first, every

@@ -1,0 +1,112 @@
+//! Points where planes are not enough: the tracker's refinement of the
+//! directions the plane registration left free against its local point
+//! map.
+
+use nalgebra::{Isometry3, Matrix6, SymmetricEigen, Vector6};
+
+use super::Tracker;
+use crate::frontend::FramePlane;
+use crate::io::PlaneKind;
+use crate::reflect::BoundedPlane;
+use crate::registration::{refine_free_directions, PointRefineParams};
+use crate::slam::log::PointsAnchor;
+use crate::slam::point_map::ScanSamples;
+use crate::slam::tracker::FrameReport;
+
+impl Tracker {
+    /// Refine the directions of `pose` that the planes left free (per
+    /// `report`'s degeneracy) against the local point map, then add the
+    /// frame's samples to the map; samples behind a reflective plane of the
+    /// frame or of the map are left out of both. Returns the refined pose
+    /// and, when the points fixed some direction, what they measured it
+    /// against; counts the fixed directions in `report`.
+    pub(super) fn refine_with_points(
+        &mut self,
+        planes: &[FramePlane],
+        samples: &ScanSamples,
+        pose: Isometry3<f64>,
+        index: usize,
+        report: &mut FrameReport,
+    ) -> (Isometry3<f64>, Option<PointsAnchor>) {
+        let pp = self.params.points;
+        let to_sensor = pose.inverse();
+        let reflective: Vec<BoundedPlane> = planes
+            .iter()
+            .filter(|fp| fp.kind == PlaneKind::Reflective)
+            .map(|fp| BoundedPlane::from_points(fp.plane, fp.hull_3d()))
+            .chain(
+                self.map
+                    .landmarks
+                    .iter()
+                    .filter(|l| l.kind == PlaneKind::Reflective)
+                    .map(|l| l.bounded().transformed(&to_sensor)),
+            )
+            .collect();
+        let clean = samples.without_reflections(&reflective, pp.reflective_margin);
+        let mut pose = pose;
+        let mut anchor = None;
+        if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
+            let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
+            let params = PointRefineParams {
+                max_correspondence: pp.max_correspondence,
+                kernel_scale: pp.kernel_scale,
+                max_iterations: pp.max_iterations,
+                min_information: pp.min_information,
+                min_alignment: pp.min_alignment,
+            };
+            let points = &self.points;
+            let refined =
+                refine_free_directions(&clean, |q, d| points.nearest(q, d), &pose, &free, &params);
+            report.fixed_by_points = refined.fixed;
+            pose = refined.pose;
+            anchor = refined.anchor.map(|frame| PointsAnchor {
+                frame,
+                directions: refined.fixed_directions,
+            });
+        }
+        self.points.insert(&clean, &pose, index);
+        if self.params.loop_closure.enabled {
+            self.clean_samples = clean;
+        }
+        self.points
+            .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
+        (pose, anchor)
+    }
+}
+
+/// The part of the span of `free` (orthonormal) that `fixed` (orthonormal)
+/// does not cover, as orthonormal directions: the eigenvectors of
+/// `P_free (I − P_fixed) P_free` whose eigenvalue exceeds one half.
+pub(crate) fn without_span(free: &[Vector6<f64>], fixed: &[Vector6<f64>]) -> Vec<Vector6<f64>> {
+    if free.is_empty() || fixed.is_empty() {
+        return free.to_vec();
+    }
+    let p_free: Matrix6<f64> = free.iter().map(|v| v * v.transpose()).sum();
+    let p_fixed: Matrix6<f64> = fixed.iter().map(|v| v * v.transpose()).sum();
+    let rest = p_free * (Matrix6::identity() - p_fixed) * p_free;
+    let eig = SymmetricEigen::new(0.5 * (rest + rest.transpose()));
+    let mut out: Vec<(f64, Vector6<f64>)> = (0..6)
+        .filter(|&k| eig.eigenvalues[k] > 0.5)
+        .map(|k| (eig.eigenvalues[k], eig.eigenvectors.column(k).into_owned()))
+        .collect();
+    out.sort_by(|a, b| b.0.total_cmp(&a.0));
+    out.into_iter().map(|(_, v)| v).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Of the span of x and y, fixing x leaves y; fixing nothing leaves
+    /// both.
+    #[test]
+    fn without_span_removes_the_fixed_directions() {
+        let x = Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let y = Vector6::new(0.0, 1.0, 0.0, 0.0, 0.0, 0.0);
+        let rest = without_span(&[x, y], &[x]);
+        assert_eq!(rest.len(), 1);
+        assert!((rest[0].dot(&y).abs() - 1.0).abs() < 1e-12);
+        assert_eq!(without_span(&[x, y], &[]).len(), 2);
+        assert!(without_span(&[x], &[x]).is_empty());
+    }
+}
