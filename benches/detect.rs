@@ -109,7 +109,7 @@ fn run(
         .arg(poses)
         .arg("--out")
         .arg(out)
-        .args(["--config", config, "--lean", "--timings"])
+        .args(["--config", config, "--lean", "--timings", "--force"])
         .output()
         .map_err(|e| format!("running {exe}: {e}"))?;
     if !output.status.success() {
