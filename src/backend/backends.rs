@@ -10,14 +10,7 @@ use super::solver::{gauss_newton, levenberg_marquardt, SolveReport, SolverParams
 use super::variables::Values;
 use crate::{Error, Result};
 
-/// A pose-plane graph optimiser. A new back-end is a type implementing this
-/// plus one arm in [`backend`].
-pub trait Backend {
-    /// The back-end's name (as in [`BackendName`]).
-    fn name(&self) -> &'static str;
-    /// Optimise `graph` from `initial`; the result holds every variable.
-    fn optimize(&self, graph: &FactorGraph, initial: &Values) -> Result<(Values, SolveReport)>;
-}
+pub use super::seam::Backend;
 
 /// Back-ends selectable by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

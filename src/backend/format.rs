@@ -410,3 +410,18 @@ fn to_file(graph: &FactorGraph) -> GraphFile {
         factors,
     }
 }
+
+/// The graph file format as methods of the graph (this module owns the
+/// format; the graph does not depend on it).
+impl FactorGraph {
+    /// Read a graph file (JSON, see `docs/graph-format.md`); errors name the
+    /// file.
+    pub fn read(path: &Path) -> Result<Self> {
+        read(path)
+    }
+
+    /// Write the graph (with its stored values) atomically as JSON.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        write(self, path)
+    }
+}

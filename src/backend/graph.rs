@@ -11,10 +11,8 @@
 //! [`PosePrior`]: super::factors::PosePrior
 
 use std::collections::BTreeSet;
-use std::path::Path;
 
 use super::factors::{keys_text, AnyFactor, Factor, GraphFactor};
-use super::format;
 use super::variables::{Key, Values};
 use crate::{Error, Result};
 
@@ -106,17 +104,6 @@ impl FactorGraph {
             return Err(Error::Input("the graph's cost is not finite".into()));
         }
         Ok(total)
-    }
-
-    /// Read a graph file (JSON, see `docs/graph-format.md`); errors name the
-    /// file.
-    pub fn read(path: &Path) -> Result<Self> {
-        format::read(path)
-    }
-
-    /// Write the graph (with its stored values) atomically as JSON.
-    pub fn write(&self, path: &Path) -> Result<()> {
-        format::write(self, path)
     }
 }
 

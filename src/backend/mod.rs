@@ -35,6 +35,7 @@ pub mod linear;
 pub mod observability;
 pub mod ordering;
 pub mod robust;
+pub mod seam;
 pub mod solver;
 pub mod synthetic;
 pub mod unit3;

@@ -2,10 +2,11 @@
 //! the data area covers data (the top-down map's used to hide the corner
 //! of the room under it).
 
+use std::path::Path;
+
 use plotters::prelude::*;
 
-use super::plots::{plot_err, rgb};
-use crate::Result;
+use crate::{Error, Result};
 
 /// A pixel rectangle of an image: `x0..x1` by `y0..y1` (half-open).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -112,4 +113,14 @@ where
         x1: panel.x0 + frame.x1,
         y1: panel.y0 + frame.y1,
     })
+}
+
+/// A drawing error as the library's error, naming the plot's file.
+pub(crate) fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Input(format!("{}: cannot draw the plot: {e}", path.display()))
+}
+
+/// A colour as `[r, g, b]` in plotters' type.
+pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
 }

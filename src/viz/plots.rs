@@ -10,6 +10,7 @@ use plotters::prelude::*;
 use plotters::style::FontStyle;
 
 use super::legend::{draw_legend, LegendEntry, Mark, PixelRect};
+pub(crate) use super::legend::{plot_err, rgb};
 use crate::eval::Metrics;
 use crate::{Error, Result};
 
@@ -51,10 +52,6 @@ pub(crate) fn render(
     }
 }
 
-pub(crate) fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Input(format!("{}: cannot draw the plot: {e}", path.display()))
-}
-
 /// Ranges covering `points` with a margin (at least `min_span` metres),
 /// stretched so one metre has the same length on both axes of a `w`×`h` plot
 /// area.
@@ -83,10 +80,6 @@ pub(crate) fn equal_ranges(
         sy = sx * h / w;
     }
     (cx - sx / 2.0..cx + sx / 2.0, cy - sy / 2.0..cy + sy / 2.0)
-}
-
-pub(crate) fn rgb(c: [u8; 3]) -> RGBColor {
-    RGBColor(c[0], c[1], c[2])
 }
 
 /// One named path of a trajectory plot (x, y, world frame).

@@ -11,9 +11,9 @@ use factrs::optimizers::{
 };
 
 use super::convert::{convert, convert_back};
-use crate::backend::backends::Backend;
 use crate::backend::graph::FactorGraph;
 use crate::backend::observability;
+use crate::backend::seam::Backend;
 use crate::backend::solver::{prepare, IterationStats, SolveReport, SolverParams, Termination};
 use crate::backend::variables::Values;
 use crate::{Error, Result};
