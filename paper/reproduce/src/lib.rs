@@ -53,7 +53,7 @@ pub use data::{DataKind, Dataset, Source};
 pub use kiss_icp::KissIcp;
 
 /// The simulator's benchmark scenes, in table order.
-pub const SCENES: [&str; 4] = ["office", "lobby", "corridor", "mirror-room"];
+pub const SCENES: [&str; 5] = ["office", "lobby", "corridor", "mirror-room", "glass-loop"];
 /// Frames simulated per scene with `--quick` (the first ones).
 pub const QUICK_FRAMES: usize = 12;
 /// The scene of the "mapping around the corner" figure.
