@@ -336,8 +336,14 @@ fn anchor_factor(
     params: &BackendParams,
 ) -> Option<AnyFactor> {
     let anchor = log.frames[k].points_anchor.as_ref()?;
+    // The last pose of the graph at or before the anchor frame; in a
+    // window that starts after it, the window's first pose: both are fixed
+    // there, so the tracked relative pose carries the points' measurement
+    // (without it the window knows the free directions only from the
+    // odometry, which there is the motion model's prediction).
     let a = frames[..frames.partition_point(|&f| f <= anchor.frame.min(k))]
         .last()
+        .or(frames.first())
         .copied()
         .filter(|&a| a < k)?;
     let measured = log.frames[a].pose.inverse() * log.frames[k].pose;
