@@ -317,6 +317,21 @@ impl Sequence {
         Ok((frame, Some(read)))
     }
 
+    /// [`scan`](Self::scan), its time added to `timings` as the stage
+    /// "pair" (every pass over the frames starts with it).
+    pub fn timed_scan(
+        &self,
+        index: usize,
+        frame: &Frame,
+        sensor: &SensorModel,
+        timings: &mut StageTimings,
+    ) -> Result<Cow<'_, OrganizedScan>> {
+        let start = Instant::now();
+        let scan = self.scan(index, frame, sensor)?;
+        timings.add("pair", start.elapsed());
+        Ok(scan)
+    }
+
     /// The organized scan of frame `index` (`frame`, as this sequence gave
     /// it): kept with the frame when the frame is kept, so later passes do
     /// not pair its returns again; built otherwise.

@@ -32,9 +32,7 @@ pub(super) fn classify_frames(
         "classify",
         |k, frame| {
             let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = sequence.scan(k, frame, sensor)?;
-            t.add("pair", start.elapsed());
+            let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
             let start = Instant::now();
             let decisions = classifier.classify(&FrameInput {
                 support: seen.support.as_ref(),

@@ -42,9 +42,7 @@ pub(super) fn detect_frames(
         |k, frame| {
             check_points(sequence, k, frame)?;
             let mut t = StageTimings::default();
-            let start = Instant::now();
-            let scan = sequence.scan(k, frame, sensor)?;
-            t.add("pair", start.elapsed());
+            let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
             let start = Instant::now();
             let detection = detector.detect(frame, &scan, frame_seed(config.seed, &frame.name));
             t.add("detect", start.elapsed());

@@ -118,9 +118,7 @@ fn gather_evidence(
             "evidence",
             |k, frame| {
                 let mut t = StageTimings::default();
-                let start = Instant::now();
-                let scan = sequence.scan(k, frame, sensor)?;
-                t.add("pair", start.elapsed());
+                let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
                 let start = Instant::now();
                 let f = EvidenceFrame {
                     frame,
