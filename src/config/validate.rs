@@ -100,6 +100,12 @@ impl Config {
                 return Err(format!("{name} must be in (0, 1], got {v}"));
             }
         }
+        let gain = self.slam.motion.free_direction_gain;
+        if !(0.0..=1.0).contains(&gain) {
+            return Err(format!(
+                "slam.motion.free_direction_gain must be in [0, 1], got {gain}"
+            ));
+        }
         if !(self.slam.gauss_newton.degeneracy_threshold >= 0.0)
             || !(self.slam.rejector.min_eigenvalue >= 0.0)
         {

@@ -476,7 +476,13 @@ impl Tracker {
             .prune(index, p.prune_after, p.prune_min_observations);
         report.landmarks = self.map.landmarks.len();
 
-        report.motion = self.motion.update(pose, dt);
+        let free: Vec<Vector6<f64>> = report
+            .degeneracy
+            .as_ref()
+            .filter(|d| d.is_degenerate())
+            .map(|d| d.directions().copied().collect())
+            .unwrap_or_default();
+        report.motion = self.motion.update_with_free(pose, dt, &free);
         self.previous = Some((usable, pose));
         report.pose = pose;
         if p.loop_closure.enabled {
