@@ -113,6 +113,13 @@ pub struct LoopClosureParams {
     /// estimate by more than this, m (smaller corrections wait for the
     /// batch at the end).
     pub resolve_correction: f64,
+    /// Whether a loop that only the points measured in some direction (its
+    /// planes left it free) may re-solve the graph during tracking. Such a
+    /// loop can be centimetres off along a corridor's axis and still pass
+    /// the gates; re-solved at once, it moves the map the tracker then
+    /// follows. Without the re-solve it waits for the batch at the end,
+    /// where the robust kernel weighs it against everything else.
+    pub resolve_on_point_loops: bool,
     /// Duplicate landmarks merge when their normals agree within this,
     /// degrees ...
     pub merge_max_angle_deg: f64,
@@ -154,6 +161,7 @@ impl Default for LoopClosureParams {
             rotation_sigma: 0.005,
             robust: RobustKernel::Cauchy { k: 1.0 },
             resolve_correction: 0.03,
+            resolve_on_point_loops: false,
             merge_max_angle_deg: 3.0,
             merge_max_offset: 0.05,
             merge_min_overlap: 0.3,
@@ -203,6 +211,15 @@ impl LoopClosureParams {
         self.robust
             .validate()
             .map_err(|e| format!("slam.loop_closure.robust: {e}"))
+    }
+
+    /// Whether the verified loop `check` re-solves the whole graph during
+    /// tracking: it moved the estimate by more than `resolve_correction`,
+    /// and its planes observed every direction (or
+    /// `resolve_on_point_loops`).
+    pub fn resolves(&self, check: &LoopMatch) -> bool {
+        check.correction > self.resolve_correction
+            && (self.resolve_on_point_loops || check.fixed_by_points == 0)
     }
 
     /// Square-root information of a loop factor.
@@ -426,5 +443,39 @@ impl LoopDetector {
         });
         out.truncate(params.max_candidates);
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn loop_match(correction: f64, fixed_by_points: usize) -> LoopMatch {
+        LoopMatch {
+            relative: Isometry3::identity(),
+            matches: 9,
+            inliers: 9,
+            min_eigenvalue: if fixed_by_points > 0 { 1e-6 } else { 1.0 },
+            fixed_by_points,
+            correction,
+            correction_deg: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_loop_measured_partly_by_points_waits_for_the_batch() {
+        let lc = LoopClosureParams::default();
+        assert!(!lc.resolve_on_point_loops);
+        // 5 cm, every direction seen by planes: re-solve now.
+        assert!(lc.resolves(&loop_match(0.05, 0)));
+        // 5 cm, the corridor's axis from the points alone: wait.
+        assert!(!lc.resolves(&loop_match(0.05, 1)));
+        // Small corrections always wait.
+        assert!(!lc.resolves(&loop_match(0.01, 0)));
+        let eager = LoopClosureParams {
+            resolve_on_point_loops: true,
+            ..lc
+        };
+        assert!(eager.resolves(&loop_match(0.05, 1)));
     }
 }

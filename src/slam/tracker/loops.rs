@@ -141,7 +141,7 @@ impl Tracker {
             robust: lc.robust,
             check: check.clone(),
         });
-        let resolve = check.correction > lc.resolve_correction;
+        let resolve = lc.resolves(&check);
         let mut out = LoopReport {
             with: from,
             check,
