@@ -66,6 +66,13 @@ pub struct PointParams {
     /// Samples behind a reflective plane within this margin of its extent
     /// are left out (they may be mirror images), m.
     pub reflective_margin: f64,
+    /// ... except behind a reflective plane that every free direction of
+    /// the frame lies in, within this angle (degrees; 0: none excepted): a
+    /// mirror image moves exactly like the real world under a translation
+    /// parallel to the mirror, so for a glass-lined corridor's axis what is
+    /// seen through or in its walls measures the axis as well as what is
+    /// not.
+    pub parallel_reflective_deg: f64,
 }
 
 impl Default for PointParams {
@@ -83,6 +90,7 @@ impl Default for PointParams {
             min_information: 20.0,
             min_alignment: 0.3,
             reflective_margin: 0.5,
+            parallel_reflective_deg: 5.0,
         }
     }
 }

@@ -30,6 +30,13 @@ impl Tracker {
     ) -> (Isometry3<f64>, Option<PointsAnchor>) {
         let pp = self.params.points;
         let to_sensor = pose.inverse();
+        let free: Vec<Vector6<f64>> = report
+            .degeneracy
+            .as_ref()
+            .filter(|d| d.is_degenerate())
+            .map(|d| d.directions().copied().collect())
+            .unwrap_or_default();
+        let masks = |bp: &BoundedPlane| !in_plane(&free, bp, pp.parallel_reflective_deg);
         let reflective: Vec<BoundedPlane> = planes
             .iter()
             .filter(|fp| fp.kind == PlaneKind::Reflective)
@@ -41,12 +48,12 @@ impl Tracker {
                     .filter(|l| l.kind == PlaneKind::Reflective)
                     .map(|l| l.bounded().transformed(&to_sensor)),
             )
+            .filter(masks)
             .collect();
         let clean = samples.without_reflections(&reflective, pp.reflective_margin);
         let mut pose = pose;
         let mut anchor = None;
-        if let Some(degeneracy) = report.degeneracy.as_ref().filter(|d| d.is_degenerate()) {
-            let free: Vec<Vector6<f64>> = degeneracy.directions().copied().collect();
+        if !free.is_empty() {
             let params = PointRefineParams {
                 max_correspondence: pp.max_correspondence,
                 kernel_scale: pp.kernel_scale,
@@ -72,6 +79,19 @@ impl Tracker {
             .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
         (pose, anchor)
     }
+}
+
+/// Whether every direction of `free` (tangent vectors `(ρ, φ)`, sensor
+/// frame) is a translation lying in the plane of `bp` within `max_deg`
+/// degrees (false when `free` is empty or `max_deg` is not positive).
+fn in_plane(free: &[Vector6<f64>], bp: &BoundedPlane, max_deg: f64) -> bool {
+    let sin = max_deg.to_radians().sin();
+    max_deg > 0.0
+        && !free.is_empty()
+        && free.iter().all(|d| {
+            let (rho, phi) = (d.fixed_rows::<3>(0), d.fixed_rows::<3>(3));
+            phi.norm() <= sin * d.norm() && bp.plane.normal.dot(&rho).abs() <= sin * rho.norm()
+        })
 }
 
 /// The part of the span of `free` (orthonormal) that `fixed` (orthonormal)
@@ -108,5 +128,40 @@ mod tests {
         assert!((rest[0].dot(&y).abs() - 1.0).abs() < 1e-12);
         assert_eq!(without_span(&[x, y], &[]).len(), 2);
         assert!(without_span(&[x], &[x]).is_empty());
+    }
+}
+
+#[cfg(test)]
+mod in_plane_tests {
+    use nalgebra::{Point3, Vector3};
+
+    use super::*;
+    use crate::geometry::Plane;
+
+    /// A wall at y = 2 facing the sensor, 10 m long and 3 m high.
+    fn wall() -> BoundedPlane {
+        let plane = Plane::new(Vector3::new(0.0, -1.0, 0.0), 2.0).expect("a unit normal");
+        let corners = [(-5.0, -1.0), (5.0, -1.0), (5.0, 2.0), (-5.0, 2.0)]
+            .map(|(x, z)| Point3::new(x, 2.0, z));
+        BoundedPlane::from_points(plane, corners)
+    }
+
+    #[test]
+    fn only_translations_within_the_plane_are_in_it() {
+        let along = Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let up = Vector6::new(0.0, 0.0, 1.0, 0.0, 0.0, 0.0);
+        let towards = Vector6::new(0.0, 1.0, 0.0, 0.0, 0.0, 0.0);
+        let yaw = Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let tilted = Vector6::new(1.0, 0.2, 0.0, 0.0, 0.0, 0.0).normalize();
+        assert!(in_plane(&[along], &wall(), 5.0));
+        assert!(in_plane(&[along, up], &wall(), 5.0));
+        assert!(!in_plane(&[along, towards], &wall(), 5.0));
+        assert!(!in_plane(&[yaw], &wall(), 5.0));
+        // 11 degrees off the wall: in it at 15, not at 5.
+        assert!(!in_plane(&[tilted], &wall(), 5.0));
+        assert!(in_plane(&[tilted], &wall(), 15.0));
+        // No free direction, or the rule off: nothing is in the plane.
+        assert!(!in_plane(&[], &wall(), 5.0));
+        assert!(!in_plane(&[along], &wall(), 0.0));
     }
 }
