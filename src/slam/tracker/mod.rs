@@ -92,6 +92,16 @@ impl FrameReport {
     pub fn is_degenerate(&self) -> bool {
         self.degenerate_directions() > 0
     }
+
+    /// The directions the frame's planes left free (orthonormal tangent
+    /// vectors `(ρ, φ)`, sensor frame; empty when none).
+    pub fn free_directions(&self) -> Vec<Vector6<f64>> {
+        self.degeneracy
+            .as_ref()
+            .filter(|d| d.is_degenerate())
+            .map(|d| d.directions().copied().collect())
+            .unwrap_or_default()
+    }
 }
 
 impl Default for SlamParams {
@@ -476,13 +486,9 @@ impl Tracker {
             .prune(index, p.prune_after, p.prune_min_observations);
         report.landmarks = self.map.landmarks.len();
 
-        let free: Vec<Vector6<f64>> = report
-            .degeneracy
-            .as_ref()
-            .filter(|d| d.is_degenerate())
-            .map(|d| d.directions().copied().collect())
-            .unwrap_or_default();
-        report.motion = self.motion.update_with_free(pose, dt, &free);
+        report.motion = self
+            .motion
+            .update_with_free(pose, dt, &report.free_directions());
         self.previous = Some((usable, pose));
         report.pose = pose;
         if p.loop_closure.enabled {

@@ -30,12 +30,7 @@ impl Tracker {
     ) -> (Isometry3<f64>, Option<PointsAnchor>) {
         let pp = self.params.points;
         let to_sensor = pose.inverse();
-        let free: Vec<Vector6<f64>> = report
-            .degeneracy
-            .as_ref()
-            .filter(|d| d.is_degenerate())
-            .map(|d| d.directions().copied().collect())
-            .unwrap_or_default();
+        let free = report.free_directions();
         let masks = |bp: &BoundedPlane| !in_plane(&free, bp, pp.parallel_reflective_deg);
         let reflective: Vec<BoundedPlane> = planes
             .iter()
