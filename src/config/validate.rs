@@ -100,6 +100,12 @@ impl Config {
                 return Err(format!("{name} must be in (0, 1], got {v}"));
             }
         }
+        let parallel = self.slam.points.parallel_reflective_deg;
+        if !(0.0..90.0).contains(&parallel) {
+            return Err(format!(
+                "slam.points.parallel_reflective_deg must be in [0, 90), got {parallel}"
+            ));
+        }
         let gain = self.slam.motion.free_direction_gain;
         if !(0.0..=1.0).contains(&gain) {
             return Err(format!(
