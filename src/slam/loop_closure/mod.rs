@@ -18,8 +18,10 @@
 //!    [`crate::slam::graph`]; it is the existing
 //!    [`Between`](crate::backend::Between) factor, whose Jacobian is
 //!    property-tested in `tests/backend_props.rs`). When the loop moves the
-//!    estimate by more than `resolve_correction`, the tracker re-solves the
-//!    whole graph at once and carries on from the result.
+//!    estimate by more than `resolve_correction` and its planes observed
+//!    every direction ([`LoopClosureParams::resolves`]), the tracker
+//!    re-solves the whole graph at once and carries on from the result; a
+//!    loop the points measured in some direction waits for the batch.
 //! 5. **Duplicate landmarks** ([`merge`]): after the re-solve the same
 //!    plane, mapped twice before the loop was closed, is one landmark
 //!    again.

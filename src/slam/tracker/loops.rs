@@ -53,9 +53,10 @@ impl Tracker {
 
     /// Look for a loop at frame `index` (tracked at `pose`, its planes the
     /// previous frame's now): when it is a loop keyframe, verify the
-    /// candidates, log the first verified loop, and when that moves the
-    /// estimate by more than `resolve_correction`, re-solve the whole
-    /// graph ([`resolve_all`](Self::resolve_all)). Returns the corrected
+    /// candidates, log the first verified loop, and when it re-solves
+    /// ([`LoopClosureParams::resolves`]: it moved the estimate by more than
+    /// `resolve_correction` and its planes observed every direction), re-solve
+    /// the whole graph ([`resolve_all`](Self::resolve_all)). Returns the corrected
     /// pose of frame `index` when it moved.
     pub(super) fn close_loop(
         &mut self,

@@ -17,7 +17,9 @@ impl Tracker {
     /// Refine the directions of `pose` that the planes left free (per
     /// `report`'s degeneracy) against the local point map, then add the
     /// frame's samples to the map; samples behind a reflective plane of the
-    /// frame or of the map are left out of both. Returns the refined pose
+    /// frame or of the map are left out of both, unless every free
+    /// direction lies in that plane (`parallel_reflective_deg`: there a
+    /// mirror image moves like the real world). Returns the refined pose
     /// and, when the points fixed some direction, what they measured it
     /// against; counts the fixed directions in `report`.
     pub(super) fn refine_with_points(
