@@ -253,3 +253,43 @@ fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
     let (recall, table) = obstacles(&off);
     assert!(recall < 1.0, "{table}");
 }
+
+/// Moving the world frame moves nothing: the map is fused relative to the
+/// first pose, so poses given in a far-off frame (a map frame, UTM
+/// coordinates) classify as the same poses near the origin do. The
+/// merger's offset test compares plane offsets `d`, which grow with the
+/// distance from the origin: fused in the world frame 2 km away, no two
+/// observations of one window agree and the map loses its landmarks.
+#[test]
+fn a_far_off_world_frame_changes_nothing() {
+    let seq = common::simulated_subset("office", (0..120).step_by(3));
+    let shift = nalgebra::Translation3::new(2000.0, -1500.0, 40.0);
+    let poses: Vec<Isometry3<f64>> = seq
+        .poses
+        .as_deref()
+        .unwrap()
+        .iter()
+        .map(|p| shift * p)
+        .collect();
+    let far = Sequence::from_frames(seq.in_memory().unwrap().to_vec(), Some(poses), "far").unwrap();
+    let c = config("default");
+    let near = run_plane_optimized(&seq, &c).unwrap();
+    let far = run_plane_optimized(&far, &c).unwrap();
+    assert!(!near.used.is_empty());
+    let observations = |o: &specular::pipeline::PlaneOptimizedOutput| -> Vec<usize> {
+        o.used
+            .iter()
+            .map(|&i| o.map.landmarks[i].observations)
+            .collect()
+    };
+    assert_eq!(observations(&far), observations(&near));
+    let miou = |o: &specular::pipeline::PlaneOptimizedOutput| {
+        o.run.confusion.as_ref().unwrap().metrics().miou
+    };
+    assert!(
+        (miou(&far) - miou(&near)).abs() < 0.5,
+        "{} vs {}",
+        miou(&far),
+        miou(&near)
+    );
+}

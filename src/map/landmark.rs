@@ -19,6 +19,18 @@ pub struct PlaneObservation {
     pub frame: usize,
 }
 
+impl PlaneObservation {
+    /// The observation in the frame `t` maps the world into.
+    pub fn transformed(&self, t: &Isometry3<f64>) -> Self {
+        Self {
+            kind: self.kind,
+            plane: self.plane.transformed(t),
+            boundary: self.boundary.iter().map(|q| t * q).collect(),
+            frame: self.frame,
+        }
+    }
+}
+
 /// A plane landmark of the global map (world frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Landmark {
@@ -50,6 +62,14 @@ impl Landmark {
             observations: 1,
             first_frame: obs.frame,
             last_frame: obs.frame,
+        }
+    }
+
+    /// Move the landmark into the frame `t` maps its frame into.
+    pub fn transform(&mut self, t: &Isometry3<f64>) {
+        self.plane = self.plane.transformed(t);
+        for q in &mut self.boundary {
+            *q = t * *q;
         }
     }
 

@@ -9,7 +9,7 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::detect::FrameSummary;
 use crate::config::Config;
@@ -42,10 +42,23 @@ pub(super) fn fuse(
     let start = Instant::now();
     let merger = merger(config);
     let mut map = PlaneMap::new();
+    // The merger compares plane offsets `d`, which depend on where the
+    // world origin is (planes whose normals differ by half a degree differ
+    // by 0.44 m in `d` 50 m from it): fuse in a frame whose origin is the
+    // first pose, as the paper's data has it, so that moving the world
+    // frame (a map frame, UTM coordinates) changes nothing.
+    let anchor = poses
+        .first()
+        .map_or_else(Vector3::zeros, |p| p.translation.vector);
+    let to_local = Isometry3::translation(-anchor.x, -anchor.y, -anchor.z);
     for summary in summaries {
         for obs in &summary.observations {
-            merger.merge(&mut map, obs);
+            merger.merge(&mut map, &obs.transformed(&to_local));
         }
+    }
+    let to_world = to_local.inverse();
+    for landmark in &mut map.landmarks {
+        landmark.transform(&to_world);
     }
     let used = map.reliable(poses, &config.map.selection());
     let planes: Vec<BoundedPlane> = used.iter().map(|&i| map.landmarks[i].bounded()).collect();
