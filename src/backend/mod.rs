@@ -9,7 +9,7 @@
 //! | [`factors`] | [`PosePrior`], [`Between`], [`PlaneObservation`], [`PointToPlane`] |
 //! | [`robust`] | Huber and Cauchy kernels (GTSAM cost convention) |
 //! | [`graph`] | [`FactorGraph`]: variables, factors, gauge, total cost |
-//! | [`format`] | the JSON graph file (`docs/graph-format.md`) |
+//! | [`format`](mod@format) | the JSON graph file (`docs/graph-format.md`) |
 //! | [`ordering`] / [`linear`] | sparse normal equations, Jacobi scaling, cached symbolic Cholesky |
 //! | [`solver`] | Gauss–Newton, Levenberg–Marquardt, [`SolveReport`] |
 //! | [`observability`] | per-pose directions the planes leave unconstrained |

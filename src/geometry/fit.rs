@@ -54,15 +54,15 @@ where
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RansacParams {
-    /// Inlier distance threshold in metres [distance_threshold].
+    /// Inlier distance threshold in metres (PCL: `distance_threshold`).
     pub distance: f64,
-    /// Maximum number of iterations [max_iterations].
+    /// Maximum number of iterations (PCL: `max_iterations`).
     pub max_iterations: usize,
-    /// Desired probability of drawing an outlier-free sample [probability];
+    /// Desired probability of drawing an outlier-free sample (PCL: `probability`);
     /// iterations stop early once it is reached.
     pub probability: f64,
     /// Refit the best model by least squares on its inliers and reselect the
-    /// inliers with the refined plane [optimize_coefficients].
+    /// inliers with the refined plane (PCL: `optimize_coefficients`).
     pub refit: bool,
 }
 

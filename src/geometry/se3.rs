@@ -6,7 +6,7 @@
 //! `Isometry3::new`, which takes the translation as-is.
 //!
 //! Every coefficient that suffers from cancellation near `θ = 0` switches to
-//! its Taylor series below [`SMALL_ANGLE`], so tiny rotations (`|φ| ~ 1e-9`)
+//! its Taylor series below `SMALL_ANGLE`, so tiny rotations (`|φ| ~ 1e-9`)
 //! stay accurate to machine precision.
 
 use nalgebra::{

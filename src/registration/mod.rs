@@ -9,7 +9,7 @@
 //! 2. [`rejector`]: mismatch removal ([`MismatchRejector`]); the paper's
 //!    RANSAC over plane triples that always include the ground pair is
 //!    [`GroundTripleRansac`].
-//! 3. [`closed_form`]: the closed-form transform of a set of pairs —
+//! 3. [`closed_form`](mod@closed_form): the closed-form transform of a set of pairs —
 //!    rotation by SVD of `Σ n_s n_tᵀ` (determinant checked), translation by
 //!    the pseudo-inverse of the stacked target normals.
 //! 4. [`gauss_newton`]: Gauss–Newton refinement over all inlier pairs with

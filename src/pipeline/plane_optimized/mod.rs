@@ -18,8 +18,8 @@
 //! the number of frames times their points, so a whole 3DRef sequence runs
 //! in the memory of a few frames plus the map.
 //!
-//! One file per step: [`detect`] (1), [`fuse`] (2, 3 and the landmarks'
-//! boundaries), [`keyframes`] (4), `classify_pass` (5); [`world_maps`]
+//! One file per step: [`detect`] (1), `fuse` (2, 3 and the landmarks'
+//! boundaries), [`keyframes`](mod@keyframes) (4), `classify_pass` (5); [`world_maps`]
 //! holds the classified maps a run writes.
 
 mod classify_pass;

@@ -4,7 +4,7 @@
 //! 1. **Keyframe database.** Whenever the sensor has moved `keyframe_move`
 //!    metres or turned `keyframe_turn_deg` since the last entry, the
 //!    frame's planes (sensor frame) and their
-//!    [`PlaneDescriptor`](descriptor::PlaneDescriptor) are stored.
+//!    [`PlaneDescriptor`] are stored.
 //! 2. **Candidates** ([`LoopDetector::candidates`]): entries at least
 //!    `min_frames_apart` frames back, whose pose lies within a plausible
 //!    distance of the current estimate (`search_radius` plus

@@ -2,9 +2,9 @@
 //! out.
 //!
 //! [`Tracker::track_at`] runs the steps in order; the point refinement of
-//! the directions the planes leave free is in [`points`], the back-end
+//! the directions the planes leave free is in `points`, the back-end
 //! during tracking (sliding window, loop closure, the re-solve at a loop)
-//! in [`loops`].
+//! in `loops`.
 
 mod loops;
 mod points;
