@@ -112,7 +112,10 @@ pub(crate) fn without_span(free: &[Vector6<f64>], fixed: &[Vector6<f64>]) -> Vec
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::{Point3, Vector3};
+
     use super::*;
+    use crate::geometry::Plane;
 
     /// Of the span of x and y, fixing x leaves y; fixing nothing leaves
     /// both.
@@ -126,14 +129,6 @@ mod tests {
         assert_eq!(without_span(&[x, y], &[]).len(), 2);
         assert!(without_span(&[x], &[x]).is_empty());
     }
-}
-
-#[cfg(test)]
-mod in_plane_tests {
-    use nalgebra::{Point3, Vector3};
-
-    use super::*;
-    use crate::geometry::Plane;
 
     /// A wall at y = 2 facing the sensor, 10 m long and 3 m high.
     fn wall() -> BoundedPlane {
