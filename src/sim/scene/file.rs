@@ -78,7 +78,7 @@ pub(super) struct TrajectoryFile {
 }
 
 /// Material parameters as written in scene files (see
-/// [`super::material`] for their meaning); omitted parameters take
+/// [`crate::sim::material`] for their meaning); omitted parameters take
 /// physically plausible defaults for the class.
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]

@@ -54,7 +54,7 @@ impl Tracker {
     /// Look for a loop at frame `index` (tracked at `pose`, its planes the
     /// previous frame's now): when it is a loop keyframe, verify the
     /// candidates, log the first verified loop, and when it re-solves
-    /// ([`LoopClosureParams::resolves`]: it moved the estimate by more than
+    /// ([`LoopClosureParams::resolves`](crate::slam::loop_closure::LoopClosureParams::resolves): it moved the estimate by more than
     /// `resolve_correction` and its planes observed every direction), re-solve
     /// the whole graph ([`resolve_all`](Self::resolve_all)). Returns the corrected
     /// pose of frame `index` when it moved.
