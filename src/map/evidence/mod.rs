@@ -74,6 +74,15 @@ pub struct EvidenceParams {
     /// Transparent cells farther than this from any surface echo are open
     /// space, not glass, m (0: no bound).
     pub echo_reach: f64,
+    /// A transparent cell at the edge of its region whose own surface
+    /// echoes are fewer than this share of what its neighbours' echo rate
+    /// predicts for its passes is an opening (0: off): glass echoes at a
+    /// rate that changes smoothly over a pane, openings never echo (the air
+    /// above a railing, the gap beside a mirror-clad column, passed by the
+    /// same beams as the glass).
+    pub echo_deficit_ratio: f64,
+    /// ... when that rate predicts at least this many echoes.
+    pub echo_deficit_min_expected: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
     /// A cell without votes of its own is decided by its neighbours only
@@ -128,6 +137,8 @@ impl Default for EvidenceParams {
             weak_single_echo_votes: false,
             min_echo_fraction: 0.0,
             echo_reach: 0.0,
+            echo_deficit_ratio: 0.0,
+            echo_deficit_min_expected: 30.0,
             max_cells: 4_000_000,
             fill_between_votes_only: false,
             bare_pass_max_deg: 0.0,
@@ -222,6 +233,8 @@ impl EvidenceGatherer {
         )?;
         empty.min_echo_fraction = params.min_echo_fraction;
         empty.echo_reach = params.echo_reach;
+        empty.echo_deficit_ratio = params.echo_deficit_ratio;
+        empty.echo_deficit_min_expected = params.echo_deficit_min_expected;
         empty.fill_between_votes_only = params.fill_between_votes_only;
         empty.min_bare_passes = if params.bare_pass_max_deg > 0.0 {
             params.min_bare_passes
