@@ -162,3 +162,40 @@ fn transparent_cells_far_from_every_echo_are_open() {
     let without = grid(0.0);
     assert_eq!(without.state(&Point2::new(3.5, 0.5)), Surface::Transparent);
 }
+
+/// A second landmark on a railing's plane gets almost none of its glass
+/// echoes (they go to the first): its transparent region, passed by
+/// thousands of beams with a handful of stray echoes, is an opening under
+/// a minimum echo fraction; glass whose passes echo a few per cent stays.
+#[test]
+fn a_transparent_region_almost_without_echoes_is_open() {
+    let region = |echoes_per_cell: u32| {
+        let mut g =
+            EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(2.0, 2.0), 0.2, 1, 100).unwrap();
+        for j in 2..6 {
+            for i in 2..6 {
+                let c = g.centre(j * g.cols + i);
+                g.vote(&c, 500, 0);
+                for _ in 0..echoes_per_cell {
+                    g.vote_echo(&c);
+                }
+            }
+        }
+        g
+    };
+    let c = Point2::new(0.7, 0.7);
+    for (echoes, fraction, state) in [
+        (0, 0.0, Surface::Transparent),
+        (1, 0.005, Surface::Open),
+        (25, 0.005, Surface::Transparent),
+    ] {
+        let mut g = region(echoes);
+        g.min_echo_fraction = fraction;
+        g.finalize();
+        assert_eq!(
+            g.state(&c),
+            state,
+            "{echoes} echoes a cell, fraction {fraction}"
+        );
+    }
+}
