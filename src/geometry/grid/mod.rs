@@ -87,6 +87,10 @@ pub struct EvidenceGrid {
     may_hide_glass: Vec<bool>,
 }
 
+/// The echo deficit test holds a cell to the echo rate of the cells within
+/// this many cells of it (0.4 m at the default 0.2 m cell).
+const DEFICIT_RATE_REACH: usize = 2;
+
 impl EvidenceGrid {
     /// An empty grid covering `[min, max]` with cells of `cell` metres;
     /// `None` when the extent is degenerate or would exceed `max_cells`.
@@ -216,45 +220,62 @@ impl EvidenceGrid {
         }
     }
 
-    /// Open every transparent cell at the edge of its region whose surface
-    /// echoes fall short of its neighbours' echo rate
-    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio)). Only edge cells:
-    /// an extent overreaches from the glass outwards, while inside a pane a
-    /// cell that echoes less (a sticker, a frame's shadow) is still glass.
-    /// Whether such a cell could hide glass unseen is left as it was: a
+    /// Open the transparent cells at the edge of their region whose surface
+    /// echoes fall short of their neighbours' echo rate
+    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio)), and the cells
+    /// behind them that fall short too, inwards until none does: an extent
+    /// overreaches from the glass outwards by up to `echo_reach`, a cell at
+    /// a time. A cell inside a pane that echoes less (a sticker, a frame's
+    /// shadow) is reached only through such cells, so it stays glass.
+    /// Whether an opened cell could hide glass unseen is left as it was: a
     /// tall pane's top, seen steeply, echoes less than its middle too.
     fn open_echo_deficits(&mut self) {
-        let passes = self.window_sums(&self.transparent, 1);
-        let echoes = self.window_sums(&self.echo, 1);
-        let before = self.states.clone();
-        let transparent_at = |i: isize, j: isize| {
-            i >= 0
-                && j >= 0
-                && (i as usize) < self.cols
-                && (j as usize) < self.rows
-                && before[j as usize * self.cols + i as usize] == Surface::Transparent
-        };
-        for (k, state) in self.states.iter_mut().enumerate() {
-            if *state != Surface::Transparent {
-                continue;
-            }
-            let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
-            let at_edge = (-1..=1).any(|dj| (-1..=1).any(|di| !transparent_at(i + di, j + dj)));
-            if !at_edge {
-                continue;
-            }
+        let passes = self.window_sums(&self.transparent, DEFICIT_RATE_REACH);
+        let echoes = self.window_sums(&self.echo, DEFICIT_RATE_REACH);
+        let (cols, rows) = (self.cols as isize, self.rows as isize);
+        let short = |k: usize| {
             let (t, e) = (self.transparent[k] as f64, self.echo[k] as f64);
-            // The 8 neighbours alone: the cell's own deficit must not lower
+            // The neighbours alone: the cell's own deficit must not lower
             // the rate it is held to.
             let (around_t, around_e) = (passes[k] as f64 - t, echoes[k] as f64 - e);
-            if around_t <= 0.0 {
+            let expected = if around_t > 0.0 {
+                t * around_e / around_t
+            } else {
+                0.0
+            };
+            expected >= self.echo_deficit_min_expected && e < self.echo_deficit_ratio * expected
+        };
+        let neighbours = |k: usize| {
+            let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
+            (-1..=1)
+                .flat_map(move |dj| (-1..=1).map(move |di| (i + di, j + dj)))
+                .filter(move |&(x, y)| (x, y) != (i, j))
+        };
+        let inside = |(x, y): (isize, isize)| x >= 0 && y >= 0 && x < cols && y < rows;
+        // Edge cells first; every cell opened makes its transparent
+        // neighbours edge cells. The result is the closure (which cells
+        // open does not depend on the order).
+        let mut queue: Vec<usize> = (0..self.states.len())
+            .filter(|&k| {
+                self.states[k] == Surface::Transparent
+                    && neighbours(k).any(|c| {
+                        !inside(c)
+                            || self.states[c.1 as usize * self.cols + c.0 as usize]
+                                != Surface::Transparent
+                    })
+            })
+            .collect();
+        while let Some(k) = queue.pop() {
+            if self.states[k] != Surface::Transparent || !short(k) {
                 continue;
             }
-            let expected = t * around_e / around_t;
-            if expected >= self.echo_deficit_min_expected && e < self.echo_deficit_ratio * expected
-            {
-                *state = Surface::Open;
-            }
+            self.states[k] = Surface::Open;
+            queue.extend(
+                neighbours(k)
+                    .filter(|&c| inside(c))
+                    .map(|(x, y)| y as usize * self.cols + x as usize)
+                    .filter(|&m| self.states[m] == Surface::Transparent),
+            );
         }
     }
 
