@@ -64,6 +64,9 @@ pub struct EvidenceGrid {
     /// ... when the neighbours' rate predicts at least this many echoes
     /// (fewer say nothing).
     pub echo_deficit_min_expected: f64,
+    /// The neighbours whose echo rate a cell is held to: the cells with
+    /// surface echoes within this distance, m.
+    pub echo_deficit_reach: f64,
     /// Votes needed (over a cell and its 8 neighbours) to decide.
     pub min_votes: u32,
     /// A cell without votes of its own is decided by its neighbours only
@@ -86,10 +89,6 @@ pub struct EvidenceGrid {
     /// ([`EvidenceGrid::could_hide_glass`]), computed by `finalize`.
     may_hide_glass: Vec<bool>,
 }
-
-/// The echo deficit test holds a cell to the echo rate of the cells within
-/// this many cells of it (0.4 m at the default 0.2 m cell).
-const DEFICIT_RATE_REACH: usize = 2;
 
 impl EvidenceGrid {
     /// An empty grid covering `[min, max]` with cells of `cell` metres;
@@ -124,6 +123,7 @@ impl EvidenceGrid {
             echo_reach: 0.0,
             echo_deficit_ratio: 0.0,
             echo_deficit_min_expected: 30.0,
+            echo_deficit_reach: 0.6,
             min_votes,
             fill_between_votes_only: false,
             opaque_intensity: None,
@@ -222,7 +222,9 @@ impl EvidenceGrid {
 
     /// Open the transparent cells at the edge of their region whose surface
     /// echoes fall short of their neighbours' echo rate
-    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio)), and the cells
+    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio): the cells with
+    /// echoes within [`echo_deficit_reach`](Self::echo_deficit_reach)), and
+    /// the cells
     /// behind them that fall short too, inwards until none does: an extent
     /// overreaches from the glass outwards by up to `echo_reach`, a cell at
     /// a time. A cell inside a pane that echoes less (a sticker, a frame's
@@ -230,14 +232,24 @@ impl EvidenceGrid {
     /// Whether an opened cell could hide glass unseen is left as it was: a
     /// tall pane's top, seen steeply, echoes less than its middle too.
     fn open_echo_deficits(&mut self) {
-        let passes = self.window_sums(&self.transparent, DEFICIT_RATE_REACH);
-        let echoes = self.window_sums(&self.echo, DEFICIT_RATE_REACH);
+        // The rate of the glass around: passes and echoes of the cells that
+        // echoed, within the reach (cells that never echoed, beside the
+        // glass, must not dilute the rate they are held to).
+        let reach = (self.echo_deficit_reach / self.cell).round().max(1.0) as usize;
+        let echoing: Vec<u32> = self
+            .transparent
+            .iter()
+            .zip(&self.echo)
+            .map(|(&t, &e)| if e > 0 { t } else { 0 })
+            .collect();
+        let passes = self.window_sums(&echoing, reach);
+        let echoes = self.window_sums(&self.echo, reach);
         let (cols, rows) = (self.cols as isize, self.rows as isize);
         let short = |k: usize| {
             let (t, e) = (self.transparent[k] as f64, self.echo[k] as f64);
-            // The neighbours alone: the cell's own deficit must not lower
-            // the rate it is held to.
-            let (around_t, around_e) = (passes[k] as f64 - t, echoes[k] as f64 - e);
+            // The others alone: the cell's own deficit must not lower the
+            // rate it is held to.
+            let (around_t, around_e) = (passes[k] as f64 - echoing[k] as f64, echoes[k] as f64 - e);
             let expected = if around_t > 0.0 {
                 t * around_e / around_t
             } else {

@@ -83,6 +83,9 @@ pub struct EvidenceParams {
     pub echo_deficit_ratio: f64,
     /// ... when that rate predicts at least this many echoes.
     pub echo_deficit_min_expected: f64,
+    /// The rate a cell is held to is that of the cells with surface echoes
+    /// within this distance, m.
+    pub echo_deficit_reach: f64,
     /// Upper bound on the grid size (cells).
     pub max_cells: usize,
     /// A cell without votes of its own is decided by its neighbours only
@@ -139,6 +142,7 @@ impl Default for EvidenceParams {
             echo_reach: 0.0,
             echo_deficit_ratio: 0.0,
             echo_deficit_min_expected: 30.0,
+            echo_deficit_reach: 0.6,
             max_cells: 4_000_000,
             fill_between_votes_only: false,
             bare_pass_max_deg: 0.0,
@@ -235,6 +239,7 @@ impl EvidenceGatherer {
         empty.echo_reach = params.echo_reach;
         empty.echo_deficit_ratio = params.echo_deficit_ratio;
         empty.echo_deficit_min_expected = params.echo_deficit_min_expected;
+        empty.echo_deficit_reach = params.echo_deficit_reach;
         empty.fill_between_votes_only = params.fill_between_votes_only;
         empty.min_bare_passes = if params.bare_pass_max_deg > 0.0 {
             params.min_bare_passes
