@@ -222,9 +222,9 @@ impl EvidenceGrid {
 
     /// Open the transparent cells at the edge of their region whose surface
     /// echoes fall short of their neighbours' echo rate
-    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio): the cells with
-    /// echoes within [`echo_deficit_reach`](Self::echo_deficit_reach)), and
-    /// the cells
+    /// ([`echo_deficit_ratio`](Self::echo_deficit_ratio); the neighbours
+    /// are the cells with echoes within
+    /// [`echo_deficit_reach`](Self::echo_deficit_reach)), and the cells
     /// behind them that fall short too, inwards until none does: an extent
     /// overreaches from the glass outwards by up to `echo_reach`, a cell at
     /// a time. A cell inside a pane that echoes less (a sticker, a frame's
