@@ -244,7 +244,6 @@ impl EvidenceGrid {
             .collect();
         let passes = self.window_sums(&echoing, reach);
         let echoes = self.window_sums(&self.echo, reach);
-        let (cols, rows) = (self.cols as isize, self.rows as isize);
         let short = |k: usize| {
             let (t, e) = (self.transparent[k] as f64, self.echo[k] as f64);
             // The others alone: the cell's own deficit must not lower the
@@ -257,24 +256,17 @@ impl EvidenceGrid {
             };
             expected >= self.echo_deficit_min_expected && e < self.echo_deficit_ratio * expected
         };
-        let neighbours = |k: usize| {
-            let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
-            (-1..=1)
-                .flat_map(move |dj| (-1..=1).map(move |di| (i + di, j + dj)))
-                .filter(move |&(x, y)| (x, y) != (i, j))
-        };
-        let inside = |(x, y): (isize, isize)| x >= 0 && y >= 0 && x < cols && y < rows;
-        // Edge cells first; every cell opened makes its transparent
+        // Edge cells first (at the grid's border, or beside a cell that is
+        // not transparent); every cell opened makes its transparent
         // neighbours edge cells. The result is the closure (which cells
         // open does not depend on the order).
         let mut queue: Vec<usize> = (0..self.states.len())
             .filter(|&k| {
                 self.states[k] == Surface::Transparent
-                    && neighbours(k).any(|c| {
-                        !inside(c)
-                            || self.states[c.1 as usize * self.cols + c.0 as usize]
-                                != Surface::Transparent
-                    })
+                    && (self.window(k).count() < 9
+                        || self
+                            .window(k)
+                            .any(|m| self.states[m] != Surface::Transparent))
             })
             .collect();
         while let Some(k) = queue.pop() {
@@ -283,9 +275,7 @@ impl EvidenceGrid {
             }
             self.states[k] = Surface::Open;
             queue.extend(
-                neighbours(k)
-                    .filter(|&c| inside(c))
-                    .map(|(x, y)| y as usize * self.cols + x as usize)
+                self.window(k)
                     .filter(|&m| self.states[m] == Surface::Transparent),
             );
         }
@@ -320,6 +310,18 @@ impl EvidenceGrid {
         out
     }
 
+    /// The cells of the 3 x 3 window centred on cell `k` that lie in the
+    /// grid, `k` included (fewer than 9 at the grid's border).
+    fn window(&self, k: usize) -> impl Iterator<Item = usize> + '_ {
+        let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
+        (-1..=1)
+            .flat_map(move |dj| (-1..=1).map(move |di| (i + di, j + dj)))
+            .filter(|&(x, y)| {
+                x >= 0 && y >= 0 && (x as usize) < self.cols && (y as usize) < self.rows
+            })
+            .map(|(x, y)| y as usize * self.cols + x as usize)
+    }
+
     /// The 8-connected regions of cells in `state`, each sorted, ordered by
     /// their first cell.
     pub fn regions(&self, state: Surface) -> Vec<Vec<usize>> {
@@ -335,18 +337,10 @@ impl EvidenceGrid {
             let mut cells = Vec::new();
             while let Some(k) = stack.pop() {
                 cells.push(k);
-                let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
-                for dj in -1..=1 {
-                    for di in -1..=1 {
-                        let (x, y) = (i + di, j + dj);
-                        if x < 0 || y < 0 || x as usize >= self.cols || y as usize >= self.rows {
-                            continue;
-                        }
-                        let m = y as usize * self.cols + x as usize;
-                        if !seen[m] && self.cell_state(m) == state {
-                            seen[m] = true;
-                            stack.push(m);
-                        }
+                for m in self.window(k) {
+                    if !seen[m] && self.cell_state(m) == state {
+                        seen[m] = true;
+                        stack.push(m);
                     }
                 }
             }
@@ -486,16 +480,7 @@ impl EvidenceGrid {
         if let Some(m) = self.may_hide_glass.get(k) {
             return *m;
         }
-        let (i, j) = ((k % self.cols) as isize, (k / self.cols) as isize);
-        let mut bare = 0u32;
-        for dj in -1..=1 {
-            for di in -1..=1 {
-                let (x, y) = (i + di, j + dj);
-                if x >= 0 && y >= 0 && (x as usize) < self.cols && (y as usize) < self.rows {
-                    bare += self.bare[y as usize * self.cols + x as usize];
-                }
-            }
-        }
+        let bare: u32 = self.window(k).map(|m| self.bare[m]).sum();
         self.vote_state(k) != Surface::Opaque && bare == 0
     }
 
@@ -514,16 +499,10 @@ impl EvidenceGrid {
             return Surface::Unknown;
         }
         let (mut t, mut o, mut e) = (0u32, 0u32, 0u32);
-        for dj in -1..=1 {
-            for di in -1..=1 {
-                let (x, y) = (i + di, j + dj);
-                if x >= 0 && y >= 0 && (x as usize) < self.cols && (y as usize) < self.rows {
-                    let k = y as usize * self.cols + x as usize;
-                    t += self.transparent[k];
-                    o += self.opaque[k];
-                    e += self.open[k];
-                }
-            }
+        for k in self.window(index) {
+            t += self.transparent[k];
+            o += self.opaque[k];
+            e += self.open[k];
         }
         if t + o + e < self.min_votes {
             Surface::Unknown

@@ -62,15 +62,9 @@ fn cells_that_never_echo_beside_echoing_glass_open_from_the_edge() {
         for k in 0..g.cols * g.rows {
             let (i, j) = (k % g.cols, k / g.cols);
             let c = g.centre(k);
-            match j {
-                0..=5 if (i, j) == (5, 3) => g.vote(&c, 90, 0),
-                0..=5 => {
-                    g.vote(&c, 10, 0);
-                    for _ in 0..80 {
-                        g.vote_echo(&c);
-                    }
-                }
-                6 | 7 => g.vote(&c, top_passes, 0),
+            match (i, j) {
+                (_, 6 | 7) => g.vote(&c, top_passes, 0),
+                (5, 3) => g.vote(&c, 90, 0),
                 _ => {
                     g.vote(&c, 10, 0);
                     for _ in 0..80 {
