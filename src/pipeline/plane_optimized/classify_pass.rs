@@ -51,7 +51,9 @@ pub(super) fn classify_frames(
                 planes: summaries[k].planes,
                 candidates: summaries[k].candidates,
             };
+            let start = Instant::now();
             score.add(sequence.path(k), frame, &output);
+            timings.add("score", start.elapsed());
             let start = Instant::now();
             sink.frame(k, frame, Some(&poses[k]), output)?;
             timings.add("write outputs", start.elapsed());

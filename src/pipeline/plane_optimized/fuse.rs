@@ -147,11 +147,13 @@ fn gather_evidence(
             },
             |_, _, (votes, t)| {
                 timings.merge(&t);
+                let start = Instant::now();
                 for (total, v) in totals.iter_mut().zip(votes) {
                     if let (Some(total), Some(v)) = (total, v) {
                         total.add(v);
                     }
                 }
+                timings.add("evidence", start.elapsed());
                 Ok(())
             },
         )?;
@@ -161,10 +163,12 @@ fn gather_evidence(
         .iter()
         .map(|p| Point3::from(p.translation.vector))
         .collect();
+    let start = Instant::now();
     for (bp, total) in planes.iter_mut().zip(totals) {
         bp.evidence = total.map(|t| Arc::new(t.finish()));
         // Where the sensor passed through the plane, it is open.
         open_where_crossed(bp, &path, config.map.evidence.crossing_radius);
     }
+    timings.add("evidence", start.elapsed());
     Ok(())
 }

@@ -170,8 +170,11 @@ impl<'a> FrameViews<'a> {
                 Ok((work(&input, &hits), start.elapsed()))
             },
             |_, _, (out, d)| {
-                cpu.add(stage, d);
+                // What a frame adds to the pass's result is part of the
+                // stage too (it runs on the calling thread, in order).
+                let start = Instant::now();
                 consume(out);
+                cpu.add(stage, d + start.elapsed());
                 Ok(())
             },
         )?;
@@ -206,7 +209,10 @@ impl<'a> FrameViews<'a> {
             },
             |points| builder.extend(points),
         )?;
-        Ok(builder.finish())
+        let start = Instant::now();
+        let support = builder.finish();
+        timings.add("support", start.elapsed());
+        Ok(support)
     }
 
     /// The space seen directly from the keyframes `frames` (world frame):
