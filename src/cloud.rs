@@ -58,6 +58,46 @@ pub fn drop_non_finite(points: &mut Vec<Point>) -> usize {
     before - points.len()
 }
 
+/// What a return's intensity measures, which decides how it falls with
+/// range: an echo's received power falls with the square of the range,
+/// and a sensor that reports a calibrated reflectivity has divided that
+/// out (the Hesai QT64 in 3DRef: `scripts/intensity-vs-range.sh`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum IntensityScale {
+    /// A reflectivity, range-compensated by the sensor (most drivers).
+    #[default]
+    Reflectivity,
+    /// The received power, falling with r² (specular's simulator).
+    RawPower,
+}
+
+impl IntensityScale {
+    /// The power of the range that turns an intensity of this scale into
+    /// a reflectivity (`I · r^k`): 0 for a reflectivity, 2 for a raw power.
+    pub fn range_exponent(self) -> f64 {
+        match self {
+            IntensityScale::Reflectivity => 0.0,
+            IntensityScale::RawPower => 2.0,
+        }
+    }
+
+    /// The name used in sensor files and PLY comments.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntensityScale::Reflectivity => "reflectivity",
+            IntensityScale::RawPower => "raw-power",
+        }
+    }
+
+    /// The scale called `name` ([`IntensityScale::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        [IntensityScale::Reflectivity, IntensityScale::RawPower]
+            .into_iter()
+            .find(|s| s.name() == name)
+    }
+}
+
 /// One frame: a revolution of the sensor with both returns.
 #[derive(Debug, Clone, Default)]
 pub struct Frame {
@@ -76,6 +116,10 @@ pub struct Frame {
     /// [`points`](Self::points), and this count is all that is left of them
     /// (reported per frame and per run). 0 for frames built in memory.
     pub dropped_non_finite: usize,
+    /// What its intensities measure, when the source says (a PLY comment
+    /// `intensity raw-power`, the simulator); `None` leaves it to the
+    /// sensor model ([`SensorModel::intensity`](crate::sensor::SensorModel::intensity)).
+    pub intensity_scale: Option<IntensityScale>,
 }
 
 impl Frame {

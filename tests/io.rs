@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
-use specular::cloud::{Frame, Point};
+use specular::cloud::{Frame, IntensityScale, Point};
 use specular::io::{
     list_frames, match_poses, parse_frame, read_frame, read_frames, read_labels, read_tum,
     write_frame, write_labels, write_tum, PlyEncoding, StampedPose,
@@ -43,6 +43,7 @@ fn sample_frame(has_labels: bool) -> Frame {
         points,
         has_labels,
         dropped_non_finite: 0,
+        intensity_scale: None,
     }
 }
 
@@ -103,8 +104,42 @@ fn ply_round_trip_binary_and_ascii() {
             assert_eq!(back.stamp, frame.stamp);
             assert_eq!(back.has_labels, labels);
             assert_eq!(back.points, frame.points, "{enc:?} labels={labels}");
+            assert_eq!(back.intensity_scale, None);
         }
     }
+}
+
+/// A frame that says what its intensities measure says so in its header
+/// (the simulator's raw power), and reads back the same; a scale the reader
+/// does not know is an error naming it.
+#[test]
+fn ply_round_trip_keeps_the_intensity_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    for scale in [IntensityScale::RawPower, IntensityScale::Reflectivity] {
+        let frame = Frame {
+            intensity_scale: Some(scale),
+            ..sample_frame(true)
+        };
+        for enc in [PlyEncoding::BinaryLittleEndian, PlyEncoding::Ascii] {
+            let p = dir.path().join("1689496219.652560.ply");
+            write_frame(&p, &frame, enc).unwrap();
+            let back = read_frame(&p).unwrap();
+            assert_eq!(back.intensity_scale, Some(scale), "{enc:?}");
+            assert_eq!(back.points, frame.points);
+        }
+    }
+    let mut bytes = ascii_ply(&PROPS, &[ROW]);
+    let at = bytes.windows(7).position(|w| w == b"element").unwrap();
+    bytes.splice(
+        at..at,
+        b"comment intensity_scale raw-power\n".iter().copied(),
+    );
+    let frame = parse_frame(&bytes, path()).unwrap();
+    assert_eq!(frame.intensity_scale, Some(IntensityScale::RawPower));
+    let bad = String::from_utf8(bytes)
+        .unwrap()
+        .replace("raw-power", "photons");
+    expect_err(bad.as_bytes(), "unknown intensity_scale 'photons'");
 }
 
 #[test]

@@ -166,6 +166,7 @@ fn mirror_frame(sensor: &SensorModel, lo: &Point3<f64>, hi: &Point3<f64>) -> Fra
         points,
         has_labels: true,
         dropped_non_finite: 0,
+        intensity_scale: None,
     }
 }
 

@@ -309,6 +309,7 @@ pub(crate) mod testing {
             points,
             has_labels: true,
             dropped_non_finite: 0,
+            intensity_scale: None,
         }
     }
 }

@@ -108,6 +108,7 @@ mod tests {
                 .collect(),
             has_labels: true,
             dropped_non_finite: 0,
+            intensity_scale: None,
         }
     }
 

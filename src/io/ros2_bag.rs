@@ -418,6 +418,7 @@ pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
         points,
         has_labels: label.is_some(),
         dropped_non_finite,
+        intensity_scale: None,
     })
 }
 
@@ -516,6 +517,7 @@ mod tests {
                 .collect(),
             has_labels: true,
             dropped_non_finite: 0,
+            intensity_scale: None,
         };
         let data = encode_pointcloud2(&frame, "lidar");
         assert_eq!(decode_pointcloud2(&data).unwrap().dropped_non_finite, 0);
@@ -551,6 +553,7 @@ mod tests {
             points,
             has_labels: true,
             dropped_non_finite: 0,
+            intensity_scale: None,
         };
         let back = decode_pointcloud2(&encode_pointcloud2(&frame, "lidar")).unwrap();
         assert_eq!(back.dropped_non_finite, 3);

@@ -435,6 +435,7 @@ mod tests {
                 ],
                 has_labels: false,
                 dropped_non_finite: 0,
+                intensity_scale: None,
             };
             let path = dir.path().join(format!("{}.ply", frame.name));
             io::write_frame(&path, &frame, PlyEncoding::BinaryLittleEndian).unwrap();

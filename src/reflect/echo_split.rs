@@ -17,6 +17,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::cloud::IntensityScale;
+
 /// Histogram range and resolution of `log10(I · r^k)`.
 const LOG_MIN: f64 = -1.0;
 const LOG_MAX: f64 = 7.0;
@@ -29,9 +31,11 @@ const BINS: usize = ((LOG_MAX - LOG_MIN) / BIN) as usize;
 pub struct EchoSplitParams {
     /// Learn and use the split.
     pub enabled: bool,
-    /// Echo strength is corrected by the range to this power (2 for a raw
-    /// return power falling with the square of the range).
-    pub range_exponent: f64,
+    /// Echo strength is corrected by the range to this power: `auto`
+    /// takes it from what the frames' intensities measure (0 for a
+    /// reflectivity, 2 for a raw power falling with the square of the
+    /// range; [`IntensityScale`]), a number forces it.
+    pub range_exponent: RangeExponent,
     /// Echo strength is corrected by the incidence on the surface hit
     /// (its normal from the neighbouring beams).
     pub incidence_correction: bool,
@@ -88,7 +92,7 @@ impl Default for EchoSplitParams {
     fn default() -> Self {
         Self {
             enabled: false,
-            range_exponent: 2.0,
+            range_exponent: RangeExponent::Auto(Auto::Auto),
             incidence_correction: false,
             min_separation: 0.8,
             min_anchors: 30,
@@ -100,6 +104,35 @@ impl Default for EchoSplitParams {
             mirror_needs_one_group: false,
             orient_without_anchors: false,
             mirror_blocked_paths: false,
+        }
+    }
+}
+
+/// The range exponent of the echo strength: from the intensities' scale,
+/// or fixed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RangeExponent {
+    /// This power, whatever the intensities measure.
+    Fixed(f64),
+    /// `"auto"`: [`IntensityScale::range_exponent`] of the frames.
+    Auto(Auto),
+}
+
+/// The word `auto` of [`RangeExponent::Auto`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Auto {
+    /// From the intensities' scale.
+    Auto,
+}
+
+impl RangeExponent {
+    /// The exponent for intensities of `scale`.
+    pub fn resolve(self, scale: IntensityScale) -> f64 {
+        match self {
+            RangeExponent::Fixed(k) => k,
+            RangeExponent::Auto(_) => scale.range_exponent(),
         }
     }
 }
@@ -231,7 +264,14 @@ impl EchoSplit {
     /// anchors (points that cannot be reflections); `None` when the
     /// strengths do not fall in two groups far enough apart, or the anchors
     /// are too few or disagree.
-    pub fn fit(all: &EchoHistogram, anchors: &EchoHistogram, p: &EchoSplitParams) -> Option<Self> {
+    /// `range_exponent` is the one the strengths were computed with
+    /// ([`RangeExponent::resolve`]).
+    pub fn fit(
+        all: &EchoHistogram,
+        anchors: &EchoHistogram,
+        p: &EchoSplitParams,
+        range_exponent: f64,
+    ) -> Option<Self> {
         let (threshold, m0, m1) = all.otsu()?;
         if (m1 - m0).abs() < p.min_separation {
             return None;
@@ -256,7 +296,7 @@ impl EchoSplit {
         Some(Self {
             threshold,
             band: p.band,
-            range_exponent: p.range_exponent,
+            range_exponent,
             incidence_correction: p.incidence_correction,
             weak_is_reflection,
         })
@@ -296,7 +336,7 @@ mod tests {
         let all = histogram(weak.iter().chain(&strong).copied());
         let anchors = histogram(strong.iter().take(100).copied());
         let p = EchoSplitParams::default();
-        let split = EchoSplit::fit(&all, &anchors, &p).expect("a split");
+        let split = EchoSplit::fit(&all, &anchors, &p, 2.0).expect("a split");
         assert!(split.threshold > 2.3 && split.threshold < 3.5, "{split:?}");
         assert!(split.weak_is_reflection);
         // A weak echo at 10 m is a reflection, a strong one transmitted.
@@ -306,7 +346,7 @@ mod tests {
         assert_eq!(split.reflected(5.0, 10.0, 0.1), Some(false));
         // Anchors on the weak side flip the orientation (strong mirrors)...
         let weak_anchors = histogram(weak.iter().take(100).copied());
-        let flipped = EchoSplit::fit(&all, &weak_anchors, &p);
+        let flipped = EchoSplit::fit(&all, &weak_anchors, &p, 2.0);
         assert!(!flipped.expect("a split").weak_is_reflection);
         // ... unless reflections must be the weaker echoes (glass that
         // transmits more than it reflects): then the split separates
@@ -315,19 +355,21 @@ mod tests {
             reflection_is_weaker: true,
             ..p
         };
-        assert!(EchoSplit::fit(&all, &weak_anchors, &glass).is_none());
+        assert!(EchoSplit::fit(&all, &weak_anchors, &glass, 2.0).is_none());
         assert!(
-            EchoSplit::fit(&all, &anchors, &glass)
+            EchoSplit::fit(&all, &anchors, &glass, 2.0)
                 .expect("a split")
                 .weak_is_reflection
         );
         // Too few anchors, or anchors on both sides: no split.
-        assert!(EchoSplit::fit(&all, &histogram(strong.iter().take(5).copied()), &p).is_none());
+        assert!(
+            EchoSplit::fit(&all, &histogram(strong.iter().take(5).copied()), &p, 2.0).is_none()
+        );
         let mixed = histogram(weak.iter().take(50).chain(strong.iter().take(50)).copied());
-        assert!(EchoSplit::fit(&all, &mixed, &p).is_none());
+        assert!(EchoSplit::fit(&all, &mixed, &p, 2.0).is_none());
         // One group: no split.
         let one = histogram(strong.iter().copied());
-        assert!(EchoSplit::fit(&one, &anchors, &p).is_none());
+        assert!(EchoSplit::fit(&one, &anchors, &p, 2.0).is_none());
     }
 
     /// Many points behind a landmark and none transmitted for sure: a
@@ -375,11 +417,30 @@ mod tests {
         assert!(is_mirror(&two, none.total(), &old));
         assert!(!is_mirror(&two, none.total(), &new));
         assert!(is_mirror(&one, none.total(), &new));
-        assert_eq!(EchoSplit::fit(&two, &none, &old), None);
-        let split = EchoSplit::fit(&two, &none, &new).expect("a split by physics");
+        assert_eq!(EchoSplit::fit(&two, &none, &old, 2.0), None);
+        let split = EchoSplit::fit(&two, &none, &new, 2.0).expect("a split by physics");
         assert!(split.weak_is_reflection);
         // Anchors that exist must still agree.
         let weak_anchors = histogram(weak.iter().take(100).copied());
-        assert_eq!(EchoSplit::fit(&two, &weak_anchors, &new), None);
+        assert_eq!(EchoSplit::fit(&two, &weak_anchors, &new, 2.0), None);
+    }
+
+    /// `auto` follows the intensities' scale, a number forces the
+    /// exponent; anything else is refused.
+    #[test]
+    fn range_exponent_is_auto_or_a_number() {
+        #[derive(Deserialize)]
+        struct Key {
+            k: RangeExponent,
+        }
+        let parse = |text: &str| toml::from_str::<Key>(text).map(|key| key.k);
+        let auto = parse("k = \"auto\"").unwrap();
+        assert_eq!(auto.resolve(IntensityScale::Reflectivity), 0.0);
+        assert_eq!(auto.resolve(IntensityScale::RawPower), 2.0);
+        let fixed = parse("k = 1.5").unwrap();
+        assert_eq!(fixed.resolve(IntensityScale::Reflectivity), 1.5);
+        assert_eq!(fixed.resolve(IntensityScale::RawPower), 1.5);
+        assert!(parse("k = \"sensor\"").is_err());
+        assert_eq!(EchoSplitParams::default().range_exponent, auto);
     }
 }

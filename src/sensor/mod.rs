@@ -9,5 +9,5 @@
 pub mod model;
 pub mod scan;
 
-pub use model::{ReturnMode, SensorModel};
+pub use model::{IntensityScale, ReturnMode, SensorModel};
 pub use scan::OrganizedScan;

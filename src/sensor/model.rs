@@ -5,6 +5,7 @@ use std::path::Path;
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
+pub use crate::cloud::IntensityScale;
 use crate::{Error, Result};
 
 /// Which two returns a dual-return sensor reports per beam.
@@ -43,6 +44,10 @@ pub struct SensorModel {
     pub range_resolution: f64,
     /// Elevation of each ring in degrees, ring 0 (bottom) first.
     pub elevations_deg: Vec<f64>,
+    /// What the intensities it reports measure (default: a reflectivity).
+    /// Frames that say otherwise (a PLY comment, the simulator) win.
+    #[serde(default)]
+    pub intensity: IntensityScale,
 }
 
 /// Built-in sensor descriptions, embedded so a fresh clone needs no files.
@@ -181,6 +186,11 @@ mod tests {
         let hdl = SensorModel::resolve("velodyne_hdl32e").unwrap();
         assert_eq!(hdl.rings(), 32);
         assert_eq!(hdl.return_mode, ReturnMode::StrongestLast);
+        assert_eq!(hdl.intensity, IntensityScale::Reflectivity);
+        assert_eq!(
+            SensorModel::resolve("pandar_qt64").unwrap().intensity,
+            IntensityScale::Reflectivity
+        );
     }
 
     #[test]

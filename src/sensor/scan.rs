@@ -230,6 +230,7 @@ mod tests {
             ],
             has_labels: true,
             dropped_non_finite: 0,
+            intensity_scale: None,
         };
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         assert_eq!(scan.partner(0), Some(1));

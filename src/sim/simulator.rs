@@ -11,7 +11,7 @@ use glam::{DMat3, DVec3};
 use super::echo::{BeamTracer, Echo};
 use super::returns;
 use super::scene::Scene;
-use crate::cloud::{Frame, Point};
+use crate::cloud::{Frame, IntensityScale, Point};
 use crate::io::StampedPose;
 use crate::rng::SplitMix64;
 
@@ -213,6 +213,8 @@ impl Simulator {
                 points,
                 has_labels: true,
                 dropped_non_finite: 0,
+                // The echo's signal, not a calibrated reflectivity.
+                intensity_scale: Some(IntensityScale::RawPower),
             },
             pose,
             truth,

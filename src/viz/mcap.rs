@@ -461,6 +461,7 @@ mod tests {
                     .collect(),
                 has_labels: false,
                 dropped_non_finite: 0,
+                intensity_scale: None,
             })
             .collect();
         let poses = (0..frames.len())

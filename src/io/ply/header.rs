@@ -1,6 +1,8 @@
 //! The PLY header: format, elements and their scalar properties, and where
 //! the body starts.
 
+use crate::cloud::IntensityScale;
+
 /// The body encoding a header declares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Format {
@@ -88,6 +90,9 @@ pub(super) struct Header {
     pub(super) body_start: usize,
     /// Number of lines in the header (ascii body line numbers follow it).
     pub(super) lines: usize,
+    /// What the intensities measure, from a `comment intensity_scale NAME`
+    /// line (specular writes one for its simulated frames).
+    pub(super) intensity_scale: Option<IntensityScale>,
 }
 
 /// Parse the header at the start of a file; the error says what is wrong
@@ -98,6 +103,7 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
     let mut vertex = None;
+    let mut intensity_scale = None;
     loop {
         if pos >= bytes.len() {
             return Err(if line_no == 0 {
@@ -133,6 +139,15 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
         };
         let rest: Vec<&str> = words.collect();
         match keyword {
+            "comment" if rest.first() == Some(&"intensity_scale") => {
+                let name = rest.get(1).copied().unwrap_or("");
+                intensity_scale = Some(IntensityScale::from_name(name).ok_or_else(|| {
+                    format!(
+                        "header line {line_no}: unknown intensity_scale '{name}' \
+                         (reflectivity or raw-power)"
+                    )
+                })?);
+            }
             "comment" | "obj_info" => {}
             "format" => {
                 if format.is_some() {
@@ -226,5 +241,6 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
         vertex,
         body_start: pos,
         lines: line_no,
+        intensity_scale,
     })
 }

@@ -5,6 +5,9 @@
 //! reads `label` when present; every other property (`nx ny nz`, ...) is
 //! skipped without being parsed. Properties may have any PLY scalar type.
 //! Elements other than `vertex` are skipped; list properties are rejected.
+//! A header comment `comment intensity_scale raw-power` (or `reflectivity`)
+//! says what the intensities measure ([`crate::cloud::IntensityScale`]);
+//! the writer adds it for frames that know (the simulator's).
 //!
 //! The ascii body is parsed from bytes without allocation per point, one
 //! token at a time, the numbers by the `fast-float2` crate, which gives

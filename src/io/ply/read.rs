@@ -64,6 +64,7 @@ pub fn parse_frame(bytes: &[u8], path: &Path) -> Result<Frame> {
         points,
         has_labels: layout.has_labels,
         dropped_non_finite,
+        intensity_scale: header.intensity_scale,
     })
 }
 

@@ -21,6 +21,8 @@ pub enum PlyEncoding {
 /// (`label` only when [`Frame::has_labels`]), atomically.
 ///
 /// Types are `float x y z intensity`, `ushort ring`, `uchar return label`.
+/// A frame whose intensity scale is known says so in a header comment
+/// (`comment intensity_scale raw-power`), which the reader takes back.
 /// The ascii encoding writes floats in their shortest round-trip form, so
 /// reading the file back gives identical points.
 pub fn write_frame(path: &Path, frame: &Frame, encoding: PlyEncoding) -> Result<()> {
@@ -29,9 +31,13 @@ pub fn write_frame(path: &Path, frame: &Frame, encoding: PlyEncoding) -> Result<
             PlyEncoding::Ascii => "ascii",
             PlyEncoding::BinaryLittleEndian => "binary_little_endian",
         };
+        write!(w, "ply\nformat {format} 1.0\ncomment written by specular\n")?;
+        if let Some(scale) = frame.intensity_scale {
+            writeln!(w, "comment intensity_scale {}", scale.name())?;
+        }
         write!(
             w,
-            "ply\nformat {format} 1.0\ncomment written by specular\nelement vertex {}\n\
+            "element vertex {}\n\
              property float x\nproperty float y\nproperty float z\n\
              property float intensity\nproperty ushort ring\nproperty uchar return\n",
             frame.points.len()

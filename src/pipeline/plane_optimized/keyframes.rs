@@ -303,7 +303,22 @@ impl<'a> FrameViews<'a> {
         let behind = p.decision.behind_distance;
         let glass = p.decision.glass_distance;
         let clearance = p.decision.space_clearance_ratio;
-        let exponent = p.echo_split.range_exponent;
+        // The frames of a sequence share one intensity scale: the first
+        // keyframe's, as its source says (a PLY comment, the simulator),
+        // else the sensor model's.
+        let scale = match frames.first() {
+            Some(&k) => self.sequence.frame(k)?.intensity_scale,
+            None => None,
+        };
+        let exponent = p
+            .echo_split
+            .range_exponent
+            .resolve(scale.unwrap_or(self.sensor.intensity));
+        tracing::info!(
+            range_exponent = exponent,
+            scale = scale.unwrap_or(self.sensor.intensity).name(),
+            "echo strengths"
+        );
         let incidence = p.echo_split.incidence_correction;
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
@@ -382,7 +397,7 @@ impl<'a> FrameViews<'a> {
             .into_iter()
             .enumerate()
             .map(|(j, (all, anchors, transmitted))| {
-                let split = EchoSplit::fit(&all, &anchors, &p.echo_split);
+                let split = EchoSplit::fit(&all, &anchors, &p.echo_split, exponent);
                 let mirror = is_mirror(&all, transmitted, &p.echo_split);
                 tracing::debug!(
                     plane = j,
