@@ -117,7 +117,7 @@ pub struct Frame {
     /// (reported per frame and per run). 0 for frames built in memory.
     pub dropped_non_finite: usize,
     /// What its intensities measure, when the source says (a PLY comment
-    /// `intensity raw-power`, the simulator); `None` leaves it to the
+    /// `intensity_scale raw-power`, the simulator); `None` leaves it to the
     /// sensor model ([`SensorModel::intensity`](crate::sensor::SensorModel::intensity)).
     pub intensity_scale: Option<IntensityScale>,
 }

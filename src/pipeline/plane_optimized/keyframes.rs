@@ -306,17 +306,15 @@ impl<'a> FrameViews<'a> {
         // The frames of a sequence share one intensity scale: the first
         // keyframe's, as its source says (a PLY comment, the simulator),
         // else the sensor model's.
-        let scale = match frames.first() {
+        let declared = match frames.first() {
             Some(&k) => self.sequence.frame(k)?.intensity_scale,
             None => None,
         };
-        let exponent = p
-            .echo_split
-            .range_exponent
-            .resolve(scale.unwrap_or(self.sensor.intensity));
+        let scale = declared.unwrap_or(self.sensor.intensity);
+        let exponent = p.echo_split.range_exponent.resolve(scale);
         tracing::info!(
             range_exponent = exponent,
-            scale = scale.unwrap_or(self.sensor.intensity).name(),
+            scale = scale.name(),
             "echo strengths"
         );
         let incidence = p.echo_split.incidence_correction;
