@@ -120,7 +120,9 @@ pub fn run_single_scan_into(
     let reading = sequence.stream_all("classify", work, |k, frame, (output, t, seconds)| {
         timings.merge(&t);
         second_returns += seconds;
+        let start = Instant::now();
         score.add(sequence.path(k), frame, &output);
+        timings.add("score", start.elapsed());
         let pose = sequence.poses.as_ref().map(|p| &p[k]);
         let start = Instant::now();
         sink.frame(k, frame, pose, output)?;
