@@ -210,6 +210,75 @@ proptest! {
         prop_assert!((c.normal - pl.normal).norm() < 1e-12);
     }
 
+
+    // ---------------------------------------------------------- plane sums
+
+    /// The incremental plane fit recovers the plane its points lie on,
+    /// whatever the reference point, and equals the batch fit.
+    #[test]
+    fn plane_sums_recover_the_plane(
+        pl in plane(),
+        uv in proptest::collection::vec((-5.0..5.0f64, -5.0..5.0f64), 3..60),
+        reference in point3(30.0),
+    ) {
+        let c = PlaneChart::of(&pl);
+        let pts: Vec<Point3<f64>> =
+            uv.iter().map(|&(u, v)| c.to_3d(&Point2::new(u, v))).collect();
+        let mut sums = specular::geometry::fit::PlaneSums::new(reference);
+        for p in &pts {
+            sums.add(p, 1.0);
+        }
+        let batch = specular::geometry::fit::fit_plane(pts.iter().copied());
+        // Nearly collinear points: the two may round either way.
+        let flat = |f: &Option<(Plane, [f64; 3])>| f.is_some_and(|(_, v)| v[1] < 1e-6);
+        let fit = sums.fit();
+        prop_assume!(!flat(&fit) && !flat(&batch));
+        match (fit, batch) {
+            (Some((fit, values)), Some((b, _))) => {
+                prop_assert!(fit.normal.dot(&pl.normal).abs() > 1.0 - 1e-9);
+                prop_assert!(fit.normal.dot(&b.normal).abs() > 1.0 - 1e-9);
+                for p in &pts {
+                    prop_assert!(fit.signed_distance(p).abs() < 1e-6 * scale(&pl, &[&reference]));
+                }
+                prop_assert!(values[0] <= values[1] && values[1] <= values[2]);
+            }
+            // Both call collinear points degenerate, or neither does.
+            (None, None) => {}
+            (a, b) => prop_assert!(false, "incremental {:?} against batch {:?}", a, b),
+        }
+    }
+
+    /// Merging the sums of two halves gives the sums of the whole, and a
+    /// point of tiny weight barely moves the plane.
+    #[test]
+    fn plane_sums_merge_and_weigh(
+        pl in plane(),
+        uv in proptest::collection::vec((-5.0..5.0f64, -5.0..5.0f64), 6..40),
+        split in 1usize..5,
+        off in 0.5..5.0f64,
+    ) {
+        let c = PlaneChart::of(&pl);
+        let pts: Vec<Point3<f64>> =
+            uv.iter().map(|&(u, v)| c.to_3d(&Point2::new(u, v))).collect();
+        let reference = c.origin;
+        let mut whole = specular::geometry::fit::PlaneSums::new(reference);
+        let (mut a, mut b) = (whole.clone(), whole.clone());
+        for (k, p) in pts.iter().enumerate() {
+            whole.add(p, 1.0);
+            if k < split { a.add(p, 1.0) } else { b.add(p, 1.0) }
+        }
+        a.merge(&b);
+        prop_assert_eq!(a.count(), whole.count());
+        let (ca, cw) = (a.centroid().unwrap(), whole.centroid().unwrap());
+        prop_assert!((ca - cw).norm() < 1e-9 * scale(&pl, &[]));
+        // An outlier `off` metres off the plane with a millionth of a
+        // point's weight moves the plane by about a millionth of that.
+        let Some((before, _)) = whole.fit() else { return Ok(()) };
+        whole.add(&(pts[0] + pl.normal * off), 1e-6);
+        let (after, _) = whole.fit().unwrap();
+        prop_assert!(after.signed_distance(&cw).abs() < 1e-4 * off);
+        prop_assert!(after.normal.dot(&before.normal).abs() > 1.0 - 1e-6);
+    }
     // ---------------------------------------------------------------- SO(3)
 
     #[test]

@@ -33,7 +33,14 @@ where
         cov += r * r.transpose();
     }
     cov /= n as f64;
-    let eig = SymmetricEigen::new(cov);
+    plane_from_moments(&Point3::from(mean), &cov)
+}
+
+/// The plane through `mean` normal to the smallest principal axis of the
+/// covariance `cov`, with its eigenvalues ascending; `None` when the
+/// points are collinear or coincident.
+fn plane_from_moments(mean: &Point3<f64>, cov: &Matrix3<f64>) -> Option<(Plane, [f64; 3])> {
+    let eig = SymmetricEigen::new(*cov);
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
     let values = [
@@ -46,8 +53,76 @@ where
         return None;
     }
     let normal = eig.eigenvectors.column(order[0]).into_owned();
-    let plane = Plane::from_point_normal(&Point3::from(mean), &normal)?;
+    let plane = Plane::from_point_normal(mean, &normal)?;
     Some((plane, values))
+}
+
+/// A weighted total-least-squares plane fitted incrementally: the sums of
+/// the points' weights, positions and outer products (relative to a
+/// reference point near them, against round-off), so a surface sampled
+/// over a whole sequence is fitted without keeping its points. Sums added
+/// in the same order give the same plane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneSums {
+    reference: Point3<f64>,
+    weight: f64,
+    count: u64,
+    sum: Vector3<f64>,
+    outer: Matrix3<f64>,
+}
+
+impl PlaneSums {
+    /// Empty sums about `reference`.
+    pub fn new(reference: Point3<f64>) -> Self {
+        Self {
+            reference,
+            weight: 0.0,
+            count: 0,
+            sum: Vector3::zeros(),
+            outer: Matrix3::zeros(),
+        }
+    }
+
+    /// Add the point `p` with weight `w` (positive).
+    #[inline]
+    pub fn add(&mut self, p: &Point3<f64>, w: f64) {
+        let d = p - self.reference;
+        self.weight += w;
+        self.count += 1;
+        self.sum += d * w;
+        self.outer += d * d.transpose() * w;
+    }
+
+    /// Add the sums of other points, kept about the same reference.
+    pub fn merge(&mut self, other: &Self) {
+        debug_assert_eq!(self.reference, other.reference);
+        self.weight += other.weight;
+        self.count += other.count;
+        self.sum += other.sum;
+        self.outer += other.outer;
+    }
+
+    /// Points added.
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// The weighted mean of the points, `None` without any.
+    pub fn centroid(&self) -> Option<Point3<f64>> {
+        (self.weight > 0.0).then(|| self.reference + self.sum / self.weight)
+    }
+
+    /// The weighted total-least-squares plane, with the eigenvalues of the
+    /// weighted covariance ascending (as [`fit_plane`]); `None` for fewer
+    /// than 3 points or a degenerate set.
+    pub fn fit(&self) -> Option<(Plane, [f64; 3])> {
+        if self.count < 3 || !(self.weight > 0.0) {
+            return None;
+        }
+        let mean = self.sum / self.weight;
+        let cov = self.outer / self.weight - mean * mean.transpose();
+        plane_from_moments(&(self.reference + mean), &cov)
+    }
 }
 
 /// RANSAC parameters (PCL names in brackets).

@@ -100,6 +100,12 @@ pub struct DecisionParams {
     /// Support from a Normal point within this radius, m (0 disables the
     /// neighbour search; the paper's 0.1 m² squared radius is 0.316 m).
     pub support_radius: f64,
+    /// Support counts only where the mirror image lies farther than
+    /// `support_radius` from the point itself: nearer, the surface the
+    /// point lies on supports its own mirror image (a wall a hand's breadth
+    /// behind a glass door leaf parked against it), which is no evidence of
+    /// a reflection.
+    pub support_excludes_own_surface: bool,
     /// Use the dual-return rule (the near return of an obstacle beam is a
     /// reflection).
     pub dual_return_rule: bool,
@@ -177,6 +183,7 @@ impl Default for DecisionParams {
             support_test: false,
             support_range: 0.1,
             support_radius: 0.0,
+            support_excludes_own_surface: false,
             dual_return_rule: true,
             dual_gap: 0.1,
             ambiguous: Class::Unclassified,
@@ -191,6 +198,13 @@ impl Default for DecisionParams {
             unseen_extent: 0.0,
         }
     }
+}
+
+/// Whether the mirror image `mirrored` of point `p` lies so near the point
+/// that the point's own surface would support it
+/// ([`DecisionParams::support_excludes_own_surface`]).
+fn supports_itself(params: &DecisionParams, p: &Point3<f64>, mirrored: &Point3<f64>) -> bool {
+    params.support_excludes_own_surface && (mirrored - p).norm() <= params.support_radius
 }
 
 /// Answers "is there an observed surface near this point" (sensor frame),
@@ -578,7 +592,7 @@ pub fn decide_with_hits(
             (classes[i], rules[i]) = (real(), Rule::SeenSurface);
             continue;
         }
-        if params.support_test {
+        if params.support_test && !supports_itself(params, &p, &mirrored) {
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {

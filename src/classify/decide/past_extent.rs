@@ -7,7 +7,7 @@ use nalgebra::Point3;
 
 use super::frame_evidence::returns_along;
 use super::hypotheses::{two_hypotheses, Verdict};
-use super::{DecisionParams, SurfaceSupport};
+use super::{supports_itself, DecisionParams, SurfaceSupport};
 use crate::classify::rule::Rule;
 use crate::classify::space::{Occupancy, SensorFrameSpace};
 use crate::classify::Class;
@@ -70,6 +70,9 @@ pub(super) fn past_seen_extent(
         return None;
     }
     let mirrored = bp.plane.mirror(&p);
+    if supports_itself(params, &p, &mirrored) {
+        return None;
+    }
     let on_beam = returns_along(
         scan,
         sensor,

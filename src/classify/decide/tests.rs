@@ -490,6 +490,52 @@ fn a_mirror_image_on_an_observed_surface_is_a_reflection() {
     );
 }
 
+/// A point 0.12 m behind the pane (a wall behind a glass leaf parked
+/// against it) has its mirror image 0.24 m from itself, within the support
+/// radius: whatever surface lies there (here a Normal point 0.2 m in front
+/// of the pane), the point's own surface would support the image as well,
+/// so it is no evidence of a reflection. With
+/// `support_excludes_own_surface` the point stays undecided, without it
+/// the support calls it a Reflection. A point 2 m behind is supported as
+/// before.
+#[test]
+fn a_mirror_image_beside_the_point_itself_is_no_support() {
+    let planes = pane();
+    let points = [([5.12f32, 0.2, 0.3], 1), ([4.8, 0.2, 0.45], 1)];
+    let support = DecisionParams {
+        support_test: true,
+        support_radius: 0.316,
+        behind_distance: 0.1,
+        ..rule_only(false)
+    };
+    let own = DecisionParams {
+        support_excludes_own_surface: true,
+        ..support
+    };
+    let d = decide_returns(&points, &support);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::Support)
+    );
+    let d = decide_returns(&points, &own);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Unclassified, Rule::Undecided)
+    );
+    // Far behind, the image lies on a surface of its own.
+    let behind = Point3::new(7.0f64, 0.2, 0.3);
+    let image = planes[0].plane.mirror(&behind);
+    let far = [
+        ([behind.x as f32, behind.y as f32, behind.z as f32], 1),
+        ([image.x as f32, image.y as f32 + 0.05, image.z as f32], 1),
+    ];
+    let d = decide_returns(&far, &own);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::Support)
+    );
+}
+
 /// The dual-return rule: where a beam's far return is an Obstacle behind
 /// the pane, its near return behind the same pane is a Reflection.
 #[test]

@@ -31,11 +31,12 @@ use votes::{vote_frame, IntensityCounts, Votes};
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Isometry3, Point2};
+use nalgebra::{Isometry3, Point2, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::cloud::Frame;
+use crate::geometry::fit::PlaneSums;
 use crate::geometry::grid::EvidenceGrid;
 use crate::reflect::BoundedPlane;
 use crate::sensor::OrganizedScan;
@@ -124,6 +125,21 @@ pub struct EvidenceParams {
     /// return behind it looks like glass on any plane (see
     /// [`direct`](super::direct)).
     pub direct_only: bool,
+    /// Refit each landmark's plane to its glass echoes over the whole
+    /// sequence (Cauchy-weighted by their distance from the map's plane)
+    /// and gather the evidence again against it. The map's plane is the
+    /// paper's moving average of the last observations, each fitted to the
+    /// small patch near normal incidence where the pane echoes: a long
+    /// glass wall seen a part at a time keeps the tilt of its last views,
+    /// and under 2 cm of range noise its far end leaves the band in which
+    /// echoes count as glass.
+    pub refit_plane: bool,
+    /// Glass echoes a landmark needs over the sequence to be refitted.
+    pub refit_min_echoes: u64,
+    /// A refit may turn the plane by at most this much, degrees, and move
+    /// it by at most the surface band at its echoes: farther is not the
+    /// same surface, and the map's plane is kept.
+    pub refit_max_angle_deg: f64,
 }
 
 impl Default for EvidenceParams {
@@ -151,6 +167,9 @@ impl Default for EvidenceParams {
             echo_owner_test: false,
             crossing_radius: 0.0,
             direct_only: false,
+            refit_plane: false,
+            refit_min_echoes: 200,
+            refit_max_angle_deg: 3.0,
         }
     }
 }
@@ -194,6 +213,9 @@ pub struct EvidenceGatherer {
     others: Vec<BoundedPlane>,
     empty: EvidenceGrid,
     params: EvidenceParams,
+    /// The landmark's boundary centroid (world frame): the reference of
+    /// its echo sums.
+    reference: Point3<f64>,
 }
 
 /// One frame's votes for one landmark.
@@ -201,6 +223,7 @@ pub struct EvidenceGatherer {
 pub struct FrameVotes {
     grid: EvidenceGrid,
     votes: Votes,
+    surface: PlaneSums,
 }
 
 /// The votes of a landmark summed over the frames so far.
@@ -212,6 +235,10 @@ pub struct EvidenceTotal {
     glass_echoes: IntensityCounts,
     /// Single echoes on the plane: count per (cell, intensity bits).
     single_echoes: BTreeMap<(usize, u32), u32>,
+    /// The landmark's plane (world frame), and the sums of its glass
+    /// echoes for the refit.
+    plane: crate::geometry::Plane,
+    surface: PlaneSums,
 }
 
 impl EvidenceGatherer {
@@ -246,11 +273,17 @@ impl EvidenceGatherer {
         } else {
             0
         };
+        let boundary = landmark.boundary_3d();
+        let centroid = boundary
+            .iter()
+            .fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords)
+            / (boundary.len().max(1) as f64);
         Some(Self {
             landmark: landmark.clone(),
             others: Vec::new(),
             empty,
             params: *params,
+            reference: Point3::from(centroid),
         })
     }
 
@@ -274,14 +307,20 @@ impl EvidenceGatherer {
             .iter()
             .map(|o| o.transformed(&to_sensor))
             .collect();
+        let mut surface = PlaneSums::new(self.reference);
         let votes = vote_frame(
             &mut grid,
             &self.landmark.transformed(&to_sensor),
             &others,
             f,
             &self.params,
+            self.params.refit_plane.then_some(&mut surface),
         );
-        FrameVotes { grid, votes }
+        FrameVotes {
+            grid,
+            votes,
+            surface,
+        }
     }
 
     /// An empty total to add frames' votes to.
@@ -291,14 +330,19 @@ impl EvidenceGatherer {
             params: self.params,
             glass_echoes: IntensityCounts::default(),
             single_echoes: BTreeMap::new(),
+            plane: self.landmark.plane,
+            surface: PlaneSums::new(self.reference),
         }
     }
 }
 
 impl EvidenceTotal {
-    /// Add one frame's votes (the order of frames does not matter).
+    /// Add one frame's votes. The counts do not depend on the order of the
+    /// frames; the echo sums are floating point, which the pipeline adds
+    /// in frame order.
     pub fn add(&mut self, v: FrameVotes) {
         self.grid.add(&v.grid);
+        self.surface.merge(&v.surface);
         for x in v.votes.glass_echo_intensity {
             self.glass_echoes.add(x);
         }
@@ -312,6 +356,32 @@ impl EvidenceTotal {
         }
     }
 
+    /// The plane through the landmark's glass echoes of the frames added so
+    /// far ([`EvidenceParams::refit_plane`]), when the refit is on, there
+    /// are `refit_min_echoes` of them, they span a plane, and it lies
+    /// within `refit_max_angle_deg` and the surface band of the landmark's
+    /// plane at the echoes' centroid.
+    pub fn refitted_plane(&self) -> Option<crate::geometry::Plane> {
+        let p = &self.params;
+        if !p.refit_plane || self.surface.count() < p.refit_min_echoes {
+            return None;
+        }
+        let (fit, spread) = self.surface.fit()?;
+        // Echoes along a strip (one row of a scan) do not fix a plane.
+        if !(spread[1] > 100.0 * spread[0].max(1e-12)) {
+            return None;
+        }
+        let fit = if fit.normal.dot(&self.plane.normal) < 0.0 {
+            fit.flipped()
+        } else {
+            fit
+        };
+        let centroid = fit.project(&self.surface.centroid()?);
+        let close = fit.normal.dot(&self.plane.normal) >= p.refit_max_angle_deg.to_radians().cos()
+            && self.plane.signed_distance(&centroid).abs() <= p.surface_band;
+        close.then_some(fit)
+    }
+
     /// The landmark's evidence grid, decided.
     pub fn finish(self) -> EvidenceGrid {
         let Self {
@@ -319,6 +389,7 @@ impl EvidenceTotal {
             params,
             glass_echoes,
             single_echoes,
+            ..
         } = self;
         // Single echoes on the plane: opaque when brighter than the
         // landmark's glass echoes by the ratio, glass otherwise (all opaque

@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use nalgebra::{Point2, Point3};
 
 use super::{EvidenceFrame, EvidenceParams};
+use crate::geometry::fit::PlaneSums;
 use crate::geometry::grid::EvidenceGrid;
 use crate::map::direct::passed_another;
 use crate::reflect::BoundedPlane;
@@ -71,6 +72,7 @@ pub(super) fn vote_frame(
     others: &[BoundedPlane],
     f: &EvidenceFrame<'_>,
     p: &EvidenceParams,
+    mut surface: Option<&mut PlaneSums>,
 ) -> Votes {
     let origin = Point3::origin();
     let cos_peak = p.peak_angle_deg.to_radians().cos();
@@ -154,6 +156,16 @@ pub(super) fn vote_frame(
                 {
                     grid.vote_echo(&uv);
                     votes.glass_echo_intensity.push(pt.intensity);
+                    // Only glass echoes sample the pane itself: single
+                    // echoes within the band are also the floor meeting
+                    // the wall, sills, mullions and the wall strips between
+                    // panes, which pull the plane off the glass.
+                    if let Some(sums) = surface.as_deref_mut() {
+                        // Cauchy weight on the distance from the current
+                        // plane.
+                        let z = 2.0 * sd / p.surface_band;
+                        sums.add(&(f.pose * x), 1.0 / (1.0 + z * z));
+                    }
                 }
                 Some(_) => {}
                 // The beam ended on the plane.

@@ -100,7 +100,9 @@ pub(super) fn bound(
 }
 
 /// Gather the transparency evidence of every landmark in `planes` (world
-/// frame) in one pass over the sequence.
+/// frame) in one pass over the sequence; with `map.evidence.refit_plane`,
+/// refit the planes to their glass echoes and gather again against them
+/// (a second pass).
 fn gather_evidence(
     sequence: &Sequence,
     sensor: &SensorModel,
@@ -108,6 +110,52 @@ fn gather_evidence(
     config: &Config,
     timings: &mut StageTimings,
 ) -> Result<()> {
+    let mut totals = evidence_pass(sequence, sensor, planes, config, timings)?;
+    if config.map.evidence.refit_plane {
+        let mut moved = false;
+        for (bp, total) in planes.iter_mut().zip(&totals) {
+            if let Some(fit) = total.as_ref().and_then(EvidenceTotal::refitted_plane) {
+                let boundary = bp.boundary_3d();
+                tracing::debug!(
+                    turned_deg = fit.normal.angle(&bp.plane.normal).to_degrees(),
+                    moved_m = boundary
+                        .first()
+                        .map_or(0.0, |q| bp.plane.signed_distance(&fit.project(q))),
+                    old = ?bp.plane,
+                    new = ?fit,
+                    "landmark plane refitted to its glass echoes"
+                );
+                *bp = BoundedPlane::from_points(fit, boundary);
+                moved = true;
+            }
+        }
+        if moved {
+            totals = evidence_pass(sequence, sensor, planes, config, timings)?;
+        }
+    }
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let path: Vec<Point3<f64>> = poses
+        .iter()
+        .map(|p| Point3::from(p.translation.vector))
+        .collect();
+    let start = Instant::now();
+    for (bp, total) in planes.iter_mut().zip(totals) {
+        bp.evidence = total.map(|t| Arc::new(t.finish()));
+        // Where the sensor passed through the plane, it is open.
+        open_where_crossed(bp, &path, config.map.evidence.crossing_radius);
+    }
+    timings.add("evidence", start.elapsed());
+    Ok(())
+}
+
+/// One pass over the sequence: every landmark's evidence totals.
+fn evidence_pass(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &[BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<Vec<Option<EvidenceTotal>>> {
     let poses = sequence.poses.as_deref().unwrap_or_default();
     let gatherers: Vec<Option<EvidenceGatherer>> = planes
         .iter()
@@ -159,16 +207,5 @@ fn gather_evidence(
         )?;
         timings.add_reading(reading);
     }
-    let path: Vec<Point3<f64>> = poses
-        .iter()
-        .map(|p| Point3::from(p.translation.vector))
-        .collect();
-    let start = Instant::now();
-    for (bp, total) in planes.iter_mut().zip(totals) {
-        bp.evidence = total.map(|t| Arc::new(t.finish()));
-        // Where the sensor passed through the plane, it is open.
-        open_where_crossed(bp, &path, config.map.evidence.crossing_radius);
-    }
-    timings.add("evidence", start.elapsed());
-    Ok(())
+    Ok(totals)
 }
