@@ -27,7 +27,7 @@ mod tests;
 mod votes;
 
 pub use crossings::{open_where_crossed, passed_through, path_crossings};
-use votes::{vote_frame, IntensityCounts, Votes};
+use votes::{sum_glass_echoes, vote_frame, IntensityCounts, Votes};
 
 use std::collections::BTreeMap;
 
@@ -214,7 +214,7 @@ pub struct EvidenceGatherer {
     empty: EvidenceGrid,
     params: EvidenceParams,
     /// The landmark's boundary centroid (world frame): the reference of
-    /// its echo sums.
+    /// its glass echoes' sums.
     reference: Point3<f64>,
 }
 
@@ -223,7 +223,6 @@ pub struct EvidenceGatherer {
 pub struct FrameVotes {
     grid: EvidenceGrid,
     votes: Votes,
-    surface: PlaneSums,
 }
 
 /// The votes of a landmark summed over the frames so far.
@@ -235,10 +234,6 @@ pub struct EvidenceTotal {
     glass_echoes: IntensityCounts,
     /// Single echoes on the plane: count per (cell, intensity bits).
     single_echoes: BTreeMap<(usize, u32), u32>,
-    /// The landmark's plane (world frame), and the sums of its glass
-    /// echoes for the refit.
-    plane: crate::geometry::Plane,
-    surface: PlaneSums,
 }
 
 impl EvidenceGatherer {
@@ -307,20 +302,69 @@ impl EvidenceGatherer {
             .iter()
             .map(|o| o.transformed(&to_sensor))
             .collect();
-        let mut surface = PlaneSums::new(self.reference);
         let votes = vote_frame(
             &mut grid,
             &self.landmark.transformed(&to_sensor),
             &others,
             f,
             &self.params,
-            self.params.refit_plane.then_some(&mut surface),
         );
-        FrameVotes {
-            grid,
-            votes,
-            surface,
+        FrameVotes { grid, votes }
+    }
+
+    /// Empty sums of the landmark's glass echoes (world frame), to add
+    /// frames' [`glass_echo_sums`](Self::glass_echo_sums) to.
+    pub fn empty_sums(&self) -> PlaneSums {
+        PlaneSums::new(self.reference)
+    }
+
+    /// One frame's glass echoes of the landmark, summed for its refit
+    /// ([`EvidenceParams::refit_plane`]): a pass that reads only the points
+    /// with a second return, far cheaper than [`votes`](Self::votes).
+    pub fn glass_echo_sums(&self, f: &EvidenceFrame<'_>) -> PlaneSums {
+        let to_sensor = f.pose.inverse();
+        let others: Vec<BoundedPlane> = self
+            .others
+            .iter()
+            .map(|o| o.transformed(&to_sensor))
+            .collect();
+        let mut sums = self.empty_sums();
+        sum_glass_echoes(
+            &self.empty,
+            &self.landmark.transformed(&to_sensor),
+            &others,
+            f,
+            &self.params,
+            &mut sums,
+        );
+        sums
+    }
+
+    /// The plane through the landmark's glass echoes `sums` (of the whole
+    /// sequence), when the refit is on ([`EvidenceParams::refit_plane`]),
+    /// there are `refit_min_echoes` of them, they span a plane, and it lies
+    /// within `refit_max_angle_deg` of the landmark's plane and within the
+    /// surface band of it at the echoes' centroid.
+    pub fn refitted_plane(&self, sums: &PlaneSums) -> Option<crate::geometry::Plane> {
+        let p = &self.params;
+        if !p.refit_plane || sums.count() < p.refit_min_echoes {
+            return None;
         }
+        let (fit, spread) = sums.fit()?;
+        // Echoes along a strip (one row of a scan) do not fix a plane.
+        if !(spread[1] > 100.0 * spread[0].max(1e-12)) {
+            return None;
+        }
+        let plane = &self.landmark.plane;
+        let fit = if fit.normal.dot(&plane.normal) < 0.0 {
+            fit.flipped()
+        } else {
+            fit
+        };
+        let centroid = fit.project(&sums.centroid()?);
+        let close = fit.normal.dot(&plane.normal) >= p.refit_max_angle_deg.to_radians().cos()
+            && plane.signed_distance(&centroid).abs() <= p.surface_band;
+        close.then_some(fit)
     }
 
     /// An empty total to add frames' votes to.
@@ -330,19 +374,14 @@ impl EvidenceGatherer {
             params: self.params,
             glass_echoes: IntensityCounts::default(),
             single_echoes: BTreeMap::new(),
-            plane: self.landmark.plane,
-            surface: PlaneSums::new(self.reference),
         }
     }
 }
 
 impl EvidenceTotal {
-    /// Add one frame's votes. The counts do not depend on the order of the
-    /// frames; the echo sums are floating point, which the pipeline adds
-    /// in frame order.
+    /// Add one frame's votes (the order of frames does not matter).
     pub fn add(&mut self, v: FrameVotes) {
         self.grid.add(&v.grid);
-        self.surface.merge(&v.surface);
         for x in v.votes.glass_echo_intensity {
             self.glass_echoes.add(x);
         }
@@ -354,32 +393,6 @@ impl EvidenceTotal {
                     .or_insert(0) += 1;
             }
         }
-    }
-
-    /// The plane through the landmark's glass echoes of the frames added so
-    /// far ([`EvidenceParams::refit_plane`]), when the refit is on, there
-    /// are `refit_min_echoes` of them, they span a plane, and it lies
-    /// within `refit_max_angle_deg` and the surface band of the landmark's
-    /// plane at the echoes' centroid.
-    pub fn refitted_plane(&self) -> Option<crate::geometry::Plane> {
-        let p = &self.params;
-        if !p.refit_plane || self.surface.count() < p.refit_min_echoes {
-            return None;
-        }
-        let (fit, spread) = self.surface.fit()?;
-        // Echoes along a strip (one row of a scan) do not fix a plane.
-        if !(spread[1] > 100.0 * spread[0].max(1e-12)) {
-            return None;
-        }
-        let fit = if fit.normal.dot(&self.plane.normal) < 0.0 {
-            fit.flipped()
-        } else {
-            fit
-        };
-        let centroid = fit.project(&self.surface.centroid()?);
-        let close = fit.normal.dot(&self.plane.normal) >= p.refit_max_angle_deg.to_radians().cos()
-            && self.plane.signed_distance(&centroid).abs() <= p.surface_band;
-        close.then_some(fit)
     }
 
     /// The landmark's evidence grid, decided.

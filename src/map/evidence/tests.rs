@@ -220,9 +220,7 @@ fn a_plane_off_its_glass_echoes_is_refitted_onto_them() {
     );
     let refit = |params: &EvidenceParams| {
         let gatherer = EvidenceGatherer::new(&landmark, params).unwrap();
-        let mut total = gatherer.total();
-        total.add(gatherer.votes(&f));
-        total.refitted_plane()
+        gatherer.refitted_plane(&gatherer.glass_echo_sums(&f))
     };
     let on = EvidenceParams {
         refit_plane: true,

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Point2, Point3};
+use nalgebra::{Point2, Point3, Vector3};
 
 use super::{EvidenceFrame, EvidenceParams};
 use crate::geometry::fit::PlaneSums;
@@ -63,6 +63,120 @@ fn from_total_order_key(key: i32) -> f32 {
     f32::from_bits((key ^ (((key >> 31) as u32) >> 1) as i32) as u32)
 }
 
+/// Where the beam of one point meets the landmark's plane.
+struct Crossing {
+    /// The point (sensor frame), its beam direction and signed distance
+    /// from the plane.
+    x: Point3<f64>,
+    dir: Vector3<f64>,
+    sd: f64,
+    /// Range of the crossing, its chart position, and the point's range
+    /// beyond it (negative in front).
+    t: f64,
+    uv: Point2<f64>,
+    s: f64,
+}
+
+/// The tests every pass over a frame applies to the points near one
+/// landmark (`plane` in the frame's sensor frame, `others` too).
+struct PlaneTests<'a> {
+    plane: &'a BoundedPlane,
+    others: &'a [BoundedPlane],
+    f: &'a EvidenceFrame<'a>,
+    p: &'a EvidenceParams,
+    echo_normal_cos: Option<f64>,
+}
+
+impl<'a> PlaneTests<'a> {
+    fn new(
+        plane: &'a BoundedPlane,
+        others: &'a [BoundedPlane],
+        f: &'a EvidenceFrame<'a>,
+        p: &'a EvidenceParams,
+    ) -> Self {
+        let echo_normal_cos =
+            (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
+        Self {
+            plane,
+            others,
+            f,
+            p,
+            echo_normal_cos,
+        }
+    }
+
+    /// Where point `x`'s beam meets the plane inside `grid`, when it can
+    /// vote: not a point farther than the surface band in front of the
+    /// plane (one dot product tells, since |r - t| >= |n·x + d|; the 1e-9
+    /// covers round-off), and, with `direct_only`, a beam that met no other
+    /// landmark first.
+    #[inline]
+    fn crossing(&self, x: Point3<f64>, grid: &EvidenceGrid) -> Option<Crossing> {
+        let (plane, p) = (self.plane, self.p);
+        let sd = plane.plane.signed_distance(&x);
+        if p.behind >= 0.0 && sd * plane.plane.d > 0.0 && sd.abs() > p.surface_band + 1e-9 {
+            return None;
+        }
+        let r = x.coords.norm();
+        if !(r > 0.0) {
+            return None;
+        }
+        let dir = x.coords / r;
+        let t = plane.plane.ray_intersection(&Point3::origin(), &dir)?;
+        let uv = plane.chart.to_2d(&Point3::from(dir * t));
+        if grid.index(&uv).is_none()
+            || (p.direct_only && passed_another(self.others, &dir, t, p.surface_band))
+        {
+            return None;
+        }
+        Some(Crossing {
+            x,
+            dir,
+            sd,
+            t,
+            uv,
+            s: r - t,
+        })
+    }
+
+    /// Whether point `i`, on the plane (`c`), is a glass echo: a surface
+    /// echo with a return behind the plane, on a surface that lies along
+    /// the plane (not one crossing it), and not the echo of another
+    /// landmark its beam meets nearer normal incidence.
+    #[inline]
+    fn is_glass_echo(&self, i: usize, c: &Crossing) -> bool {
+        let (f, p) = (self.f, self.p);
+        f.scan
+            .partner(i)
+            .is_some_and(|j| f.frame.points[j].range() - c.t > p.behind)
+            && !self.crosses(i)
+            && !self.owned_by_other(&c.x, &c.dir)
+    }
+
+    /// Whether the surface around point `i` crosses the plane rather than
+    /// lying on it (unknown surfaces do not).
+    fn crosses(&self, i: usize) -> bool {
+        self.echo_normal_cos.is_some_and(|cos| {
+            self.f
+                .scan
+                .local_normal(self.f.frame, i)
+                .is_some_and(|n| n.dot(&self.plane.plane.normal).abs() < cos)
+        })
+    }
+
+    /// Whether the echo at `x` (beam `dir`) lies on another landmark that
+    /// its beam meets nearer normal incidence.
+    fn owned_by_other(&self, x: &Point3<f64>, dir: &Vector3<f64>) -> bool {
+        let here = self.plane.plane.normal.dot(dir).abs();
+        self.p.echo_owner_test
+            && self.others.iter().any(|o| {
+                o.plane.signed_distance(x).abs() <= self.p.surface_band
+                    && o.plane.normal.dot(dir).abs() > here
+                    && o.bounds_2d(&o.chart.to_2d(x), 0.0)
+            })
+    }
+}
+
 /// Add one frame's transparent votes and collect its echoes on the plane;
 /// `plane` is the landmark in the frame's sensor frame (same chart
 /// coordinates as the grid).
@@ -72,112 +186,77 @@ pub(super) fn vote_frame(
     others: &[BoundedPlane],
     f: &EvidenceFrame<'_>,
     p: &EvidenceParams,
-    mut surface: Option<&mut PlaneSums>,
 ) -> Votes {
-    let origin = Point3::origin();
+    let tests = PlaneTests::new(plane, others, f, p);
     let cos_peak = p.peak_angle_deg.to_radians().cos();
     let bare_cos = (p.bare_pass_max_deg > 0.0).then(|| p.bare_pass_max_deg.to_radians().cos());
-    let echo_normal_cos =
-        (p.echo_normal_max_deg > 0.0).then(|| p.echo_normal_max_deg.to_radians().cos());
-    // Whether the echo at `x` (beam `dir`) lies on another landmark that
-    // its beam meets nearer normal incidence.
-    let owned_by_other = |x: &Point3<f64>, dir: &nalgebra::Vector3<f64>| {
-        let here = plane.plane.normal.dot(dir).abs();
-        p.echo_owner_test
-            && others.iter().any(|o| {
-                o.plane.signed_distance(x).abs() <= p.surface_band
-                    && o.plane.normal.dot(dir).abs() > here
-                    && o.bounds_2d(&o.chart.to_2d(x), 0.0)
-            })
-    };
-    // Whether the surface around point `i` crosses the plane rather than
-    // lying on it (unknown surfaces do not).
-    let crosses = |i: usize| {
-        echo_normal_cos.is_some_and(|c| {
-            f.scan
-                .local_normal(f.frame, i)
-                .is_some_and(|n| n.dot(&plane.plane.normal).abs() < c)
-        })
-    };
     let mut votes = Votes::default();
-    // A point on the sensor's side of the plane lies at least its distance
-    // from the plane in front of the crossing along its beam (|r - t| >=
-    // |n·x + d|): farther than the surface band it casts no vote, which one
-    // dot product tells without the crossing (the 1e-9 covers round-off).
-    let d = plane.plane.d;
-    let skip_front = p.behind >= 0.0;
     for (i, pt) in f.frame.points.iter().enumerate() {
-        let x = pt.position();
-        let sd = plane.plane.signed_distance(&x);
-        if skip_front && sd * d > 0.0 && sd.abs() > p.surface_band + 1e-9 {
-            continue;
-        }
-        let r = x.coords.norm();
-        if !(r > 0.0) {
-            continue;
-        }
-        let dir = x.coords / r;
-        let Some(t) = plane.plane.ray_intersection(&origin, &dir) else {
+        let Some(c) = tests.crossing(pt.position(), grid) else {
             continue;
         };
-        let uv = plane.chart.to_2d(&(origin + dir * t));
-        if grid.index(&uv).is_none()
-            || (p.direct_only && passed_another(others, &dir, t, p.surface_band))
-        {
-            continue;
-        }
-        let s = r - t;
-        if s > p.behind {
+        if c.s > p.behind {
             // A beam through the plane: glass, or open space where the plane
             // has no surface at all. Only near the landmark's own boundary
             // (where dual returns found the surface) does it count.
-            if plane.boundary.signed_distance(&uv) <= p.pass_margin {
-                grid.vote(&uv, 1, 0);
+            if plane.boundary.signed_distance(&c.uv) <= p.pass_margin {
+                grid.vote(&c.uv, 1, 0);
             } else {
-                grid.vote_open(&uv);
+                grid.vote_open(&c.uv);
             }
             // Near normal incidence without an echo from the plane: bare.
-            if bare_cos.is_some_and(|c| plane.plane.normal.dot(&dir).abs() >= c) {
+            if bare_cos.is_some_and(|cos| plane.plane.normal.dot(&c.dir).abs() >= cos) {
                 let echoed = f
                     .scan
                     .partner(i)
-                    .is_some_and(|j| (f.frame.points[j].range() - t).abs() <= p.surface_band);
+                    .is_some_and(|j| (f.frame.points[j].range() - c.t).abs() <= p.surface_band);
                 if !echoed {
-                    grid.vote_bare(&uv);
+                    grid.vote_bare(&c.uv);
                 }
             }
-        } else if s.abs() <= p.surface_band {
-            match f.scan.partner(i) {
-                // A surface echo with a return behind the plane: glass.
-                Some(j)
-                    if f.frame.points[j].range() - t > p.behind
-                        && !crosses(i)
-                        && !owned_by_other(&x, &dir) =>
-                {
-                    grid.vote_echo(&uv);
-                    votes.glass_echo_intensity.push(pt.intensity);
-                    // Only glass echoes sample the pane itself: single
-                    // echoes within the band are also the floor meeting
-                    // the wall, sills, mullions and the wall strips between
-                    // panes, which pull the plane off the glass.
-                    if let Some(sums) = surface.as_deref_mut() {
-                        // Cauchy weight on the distance from the current
-                        // plane.
-                        let z = 2.0 * sd / p.surface_band;
-                        sums.add(&(f.pose * x), 1.0 / (1.0 + z * z));
-                    }
-                }
-                Some(_) => {}
+        } else if c.s.abs() <= p.surface_band {
+            if f.scan.partner(i).is_none() {
                 // The beam ended on the plane.
-                None => {
-                    if plane.plane.normal.dot(&dir).abs() < cos_peak {
-                        votes.single_echoes.push((uv, pt.intensity));
-                    }
+                if plane.plane.normal.dot(&c.dir).abs() < cos_peak {
+                    votes.single_echoes.push((c.uv, pt.intensity));
                 }
+            } else if tests.is_glass_echo(i, &c) {
+                grid.vote_echo(&c.uv);
+                votes.glass_echo_intensity.push(pt.intensity);
             }
         }
     }
     votes
+}
+
+/// Add one frame's glass echoes of the landmark to `sums` (world frame),
+/// Cauchy-weighted by their distance from the plane, for its refit
+/// ([`EvidenceParams::refit_plane`]): the echoes [`vote_frame`] counts as
+/// glass, found among the points with a second return only. Only glass
+/// echoes sample the pane itself: single echoes within the band are also
+/// the floor meeting the wall, sills, mullions and the wall strips between
+/// panes, which pull the plane off the glass.
+pub(super) fn sum_glass_echoes(
+    extent: &EvidenceGrid,
+    plane: &BoundedPlane,
+    others: &[BoundedPlane],
+    f: &EvidenceFrame<'_>,
+    p: &EvidenceParams,
+    sums: &mut PlaneSums,
+) {
+    let tests = PlaneTests::new(plane, others, f, p);
+    for (i, pt) in f.frame.points.iter().enumerate() {
+        if f.scan.partner(i).is_none() {
+            continue;
+        }
+        let Some(c) = tests.crossing(pt.position(), extent) else {
+            continue;
+        };
+        if c.s.abs() <= p.surface_band && tests.is_glass_echo(i, &c) {
+            let z = 2.0 * c.sd / p.surface_band;
+            sums.add(&(f.pose * c.x), 1.0 / (1.0 + z * z));
+        }
+    }
 }
 
 #[cfg(test)]

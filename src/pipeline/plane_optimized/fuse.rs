@@ -13,6 +13,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 use super::detect::FrameSummary;
 use crate::config::Config;
+use crate::geometry::fit::PlaneSums;
 use crate::map::{
     find_panes, open_where_crossed, BoundaryMode, EvidenceFrame, EvidenceGatherer, EvidenceTotal,
     PlaneMap,
@@ -101,8 +102,7 @@ pub(super) fn bound(
 
 /// Gather the transparency evidence of every landmark in `planes` (world
 /// frame) in one pass over the sequence; with `map.evidence.refit_plane`,
-/// refit the planes to their glass echoes and gather again against them
-/// (a second pass).
+/// first refit the planes to their glass echoes (a lighter pass).
 fn gather_evidence(
     sequence: &Sequence,
     sensor: &SensorModel,
@@ -110,29 +110,10 @@ fn gather_evidence(
     config: &Config,
     timings: &mut StageTimings,
 ) -> Result<()> {
-    let mut totals = evidence_pass(sequence, sensor, planes, config, timings)?;
     if config.map.evidence.refit_plane {
-        let mut moved = false;
-        for (bp, total) in planes.iter_mut().zip(&totals) {
-            if let Some(fit) = total.as_ref().and_then(EvidenceTotal::refitted_plane) {
-                let boundary = bp.boundary_3d();
-                tracing::debug!(
-                    turned_deg = fit.normal.angle(&bp.plane.normal).to_degrees(),
-                    moved_m = boundary
-                        .first()
-                        .map_or(0.0, |q| bp.plane.signed_distance(&fit.project(q))),
-                    old = ?bp.plane,
-                    new = ?fit,
-                    "landmark plane refitted to its glass echoes"
-                );
-                *bp = BoundedPlane::from_points(fit, boundary);
-                moved = true;
-            }
-        }
-        if moved {
-            totals = evidence_pass(sequence, sensor, planes, config, timings)?;
-        }
+        refit_planes(sequence, sensor, planes, config, timings)?;
     }
+    let totals = evidence_pass(sequence, sensor, planes, config, timings)?;
     let poses = sequence.poses.as_deref().unwrap_or_default();
     let path: Vec<Point3<f64>> = poses
         .iter()
@@ -148,16 +129,9 @@ fn gather_evidence(
     Ok(())
 }
 
-/// One pass over the sequence: every landmark's evidence totals.
-fn evidence_pass(
-    sequence: &Sequence,
-    sensor: &SensorModel,
-    planes: &[BoundedPlane],
-    config: &Config,
-    timings: &mut StageTimings,
-) -> Result<Vec<Option<EvidenceTotal>>> {
-    let poses = sequence.poses.as_deref().unwrap_or_default();
-    let gatherers: Vec<Option<EvidenceGatherer>> = planes
+/// One evidence gatherer per landmark of `planes`, aware of the others.
+fn gatherers(planes: &[BoundedPlane], config: &Config) -> Vec<Option<EvidenceGatherer>> {
+    planes
         .iter()
         .enumerate()
         .map(|(k, bp)| {
@@ -169,7 +143,89 @@ fn evidence_pass(
                 .collect();
             EvidenceGatherer::new(bp, &config.map.evidence).map(|g| g.with_others(&others))
         })
+        .collect()
+}
+
+/// Refit every landmark's plane to its glass echoes over the sequence
+/// (`map.evidence.refit_plane`): a pass over the points with a second
+/// return, summing the echoes in frame order, then each plane whose refit
+/// is accepted replaced, its boundary projected onto it.
+fn refit_planes(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &mut [BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<()> {
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let gatherers = gatherers(planes, config);
+    if gatherers.iter().all(Option::is_none) {
+        return Ok(());
+    }
+    let mut sums: Vec<Option<PlaneSums>> = gatherers
+        .iter()
+        .map(|g| g.as_ref().map(EvidenceGatherer::empty_sums))
         .collect();
+    let reading = sequence.stream_all(
+        "plane refit",
+        |k, frame| {
+            let mut t = StageTimings::default();
+            let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
+            let start = Instant::now();
+            let f = EvidenceFrame {
+                frame,
+                scan: &scan,
+                pose: poses[k],
+            };
+            let frame_sums: Vec<_> = gatherers
+                .iter()
+                .map(|g| g.as_ref().map(|g| g.glass_echo_sums(&f)))
+                .collect();
+            t.add("refit", start.elapsed());
+            Ok((frame_sums, t))
+        },
+        |_, _, (frame_sums, t)| {
+            timings.merge(&t);
+            for (total, s) in sums.iter_mut().zip(&frame_sums) {
+                if let (Some(total), Some(s)) = (total, s) {
+                    total.merge(s);
+                }
+            }
+            Ok(())
+        },
+    )?;
+    timings.add_reading(reading);
+    for ((bp, g), s) in planes.iter_mut().zip(&gatherers).zip(&sums) {
+        let (Some(g), Some(s)) = (g, s) else {
+            continue;
+        };
+        if let Some(fit) = g.refitted_plane(s) {
+            let boundary = bp.boundary_3d();
+            tracing::debug!(
+                turned_deg = fit.normal.angle(&bp.plane.normal).to_degrees(),
+                moved_m = boundary
+                    .first()
+                    .map_or(0.0, |q| bp.plane.signed_distance(&fit.project(q))),
+                old = ?bp.plane,
+                new = ?fit,
+                "landmark plane refitted to its glass echoes"
+            );
+            *bp = BoundedPlane::from_points(fit, boundary);
+        }
+    }
+    Ok(())
+}
+
+/// One pass over the sequence: every landmark's evidence totals.
+fn evidence_pass(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    planes: &[BoundedPlane],
+    config: &Config,
+    timings: &mut StageTimings,
+) -> Result<Vec<Option<EvidenceTotal>>> {
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let gatherers = gatherers(planes, config);
     let mut totals: Vec<Option<EvidenceTotal>> = gatherers
         .iter()
         .map(|g| g.as_ref().map(EvidenceGatherer::total))
