@@ -296,19 +296,8 @@ impl EvidenceGatherer {
     /// One frame's votes.
     pub fn votes(&self, f: &EvidenceFrame<'_>) -> FrameVotes {
         let mut grid = self.empty.empty_like();
-        let to_sensor = f.pose.inverse();
-        let others: Vec<BoundedPlane> = self
-            .others
-            .iter()
-            .map(|o| o.transformed(&to_sensor))
-            .collect();
-        let votes = vote_frame(
-            &mut grid,
-            &self.landmark.transformed(&to_sensor),
-            &others,
-            f,
-            &self.params,
-        );
+        let (landmark, others) = self.in_sensor_frame(f);
+        let votes = vote_frame(&mut grid, &landmark, &others, f, &self.params);
         FrameVotes { grid, votes }
     }
 
@@ -322,22 +311,21 @@ impl EvidenceGatherer {
     /// ([`EvidenceParams::refit_plane`]): a pass that reads only the points
     /// with a second return, far cheaper than [`votes`](Self::votes).
     pub fn glass_echo_sums(&self, f: &EvidenceFrame<'_>) -> PlaneSums {
+        let (landmark, others) = self.in_sensor_frame(f);
+        let mut sums = self.empty_sums();
+        sum_glass_echoes(&self.empty, &landmark, &others, f, &self.params, &mut sums);
+        sums
+    }
+
+    /// The landmark and the others in frame `f`'s sensor frame.
+    fn in_sensor_frame(&self, f: &EvidenceFrame<'_>) -> (BoundedPlane, Vec<BoundedPlane>) {
         let to_sensor = f.pose.inverse();
-        let others: Vec<BoundedPlane> = self
+        let others = self
             .others
             .iter()
             .map(|o| o.transformed(&to_sensor))
             .collect();
-        let mut sums = self.empty_sums();
-        sum_glass_echoes(
-            &self.empty,
-            &self.landmark.transformed(&to_sensor),
-            &others,
-            f,
-            &self.params,
-            &mut sums,
-        );
-        sums
+        (self.landmark.transformed(&to_sensor), others)
     }
 
     /// The plane through the landmark's glass echoes `sums` (of the whole

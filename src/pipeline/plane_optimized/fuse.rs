@@ -157,7 +157,6 @@ fn refit_planes(
     config: &Config,
     timings: &mut StageTimings,
 ) -> Result<()> {
-    let poses = sequence.poses.as_deref().unwrap_or_default();
     let gatherers = gatherers(planes, config);
     if gatherers.iter().all(Option::is_none) {
         return Ok(());
@@ -166,35 +165,16 @@ fn refit_planes(
         .iter()
         .map(|g| g.as_ref().map(EvidenceGatherer::empty_sums))
         .collect();
-    let reading = sequence.stream_all(
-        "plane refit",
-        |k, frame| {
-            let mut t = StageTimings::default();
-            let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
-            let start = Instant::now();
-            let f = EvidenceFrame {
-                frame,
-                scan: &scan,
-                pose: poses[k],
-            };
-            let frame_sums: Vec<_> = gatherers
-                .iter()
-                .map(|g| g.as_ref().map(|g| g.glass_echo_sums(&f)))
-                .collect();
-            t.add("refit", start.elapsed());
-            Ok((frame_sums, t))
-        },
-        |_, _, (frame_sums, t)| {
-            timings.merge(&t);
-            for (total, s) in sums.iter_mut().zip(&frame_sums) {
-                if let (Some(total), Some(s)) = (total, s) {
-                    total.merge(s);
-                }
-            }
-            Ok(())
-        },
+    per_landmark_pass(
+        sequence,
+        sensor,
+        &gatherers,
+        ("plane refit", "refit"),
+        timings,
+        EvidenceGatherer::glass_echo_sums,
+        |total: &mut PlaneSums, s| total.merge(&s),
+        &mut sums,
     )?;
-    timings.add_reading(reading);
     for ((bp, g), s) in planes.iter_mut().zip(&gatherers).zip(&sums) {
         let (Some(g), Some(s)) = (g, s) else {
             continue;
@@ -224,44 +204,72 @@ fn evidence_pass(
     config: &Config,
     timings: &mut StageTimings,
 ) -> Result<Vec<Option<EvidenceTotal>>> {
-    let poses = sequence.poses.as_deref().unwrap_or_default();
     let gatherers = gatherers(planes, config);
     let mut totals: Vec<Option<EvidenceTotal>> = gatherers
         .iter()
         .map(|g| g.as_ref().map(EvidenceGatherer::total))
         .collect();
     if gatherers.iter().any(Option::is_some) {
-        let reading = sequence.stream_all(
-            "evidence",
-            |k, frame| {
-                let mut t = StageTimings::default();
-                let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
-                let start = Instant::now();
-                let f = EvidenceFrame {
-                    frame,
-                    scan: &scan,
-                    pose: poses[k],
-                };
-                let votes: Vec<_> = gatherers
-                    .iter()
-                    .map(|g| g.as_ref().map(|g| g.votes(&f)))
-                    .collect();
-                t.add("evidence", start.elapsed());
-                Ok((votes, t))
-            },
-            |_, _, (votes, t)| {
-                timings.merge(&t);
-                let start = Instant::now();
-                for (total, v) in totals.iter_mut().zip(votes) {
-                    if let (Some(total), Some(v)) = (total, v) {
-                        total.add(v);
-                    }
-                }
-                timings.add("evidence", start.elapsed());
-                Ok(())
-            },
+        per_landmark_pass(
+            sequence,
+            sensor,
+            &gatherers,
+            ("evidence", "evidence"),
+            timings,
+            EvidenceGatherer::votes,
+            EvidenceTotal::add,
+            &mut totals,
         )?;
-        timings.add_reading(reading);
     }
     Ok(totals)
+}
+
+/// One pass over every frame of the sequence: each landmark's gatherer
+/// reads the frame (`read`, in parallel across frames), and its result is
+/// added to the landmark's total in frame order (`add`). `stage` names the
+/// pass's progress bar and its timing.
+#[allow(clippy::too_many_arguments)]
+fn per_landmark_pass<T: Send, A>(
+    sequence: &Sequence,
+    sensor: &SensorModel,
+    gatherers: &[Option<EvidenceGatherer>],
+    (pass, stage): (&'static str, &'static str),
+    timings: &mut StageTimings,
+    read: impl Fn(&EvidenceGatherer, &EvidenceFrame<'_>) -> T + Sync,
+    add: impl Fn(&mut A, T),
+    totals: &mut [Option<A>],
+) -> Result<()> {
+    let poses = sequence.poses.as_deref().unwrap_or_default();
+    let reading = sequence.stream_all(
+        pass,
+        |k, frame| {
+            let mut t = StageTimings::default();
+            let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
+            let start = Instant::now();
+            let f = EvidenceFrame {
+                frame,
+                scan: &scan,
+                pose: poses[k],
+            };
+            let per_landmark: Vec<Option<T>> = gatherers
+                .iter()
+                .map(|g| g.as_ref().map(|g| read(g, &f)))
+                .collect();
+            t.add(stage, start.elapsed());
+            Ok((per_landmark, t))
+        },
+        |_, _, (per_landmark, t)| {
+            timings.merge(&t);
+            let start = Instant::now();
+            for (total, x) in totals.iter_mut().zip(per_landmark) {
+                if let (Some(total), Some(x)) = (total, x) {
+                    add(total, x);
+                }
+            }
+            timings.add(stage, start.elapsed());
+            Ok(())
+        },
+    )?;
+    timings.add_reading(reading);
+    Ok(())
 }
