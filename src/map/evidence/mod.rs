@@ -126,8 +126,9 @@ pub struct EvidenceParams {
     /// [`direct`](super::direct)).
     pub direct_only: bool,
     /// Refit each landmark's plane to its glass echoes over the whole
-    /// sequence (Cauchy-weighted by their distance from the map's plane)
-    /// and gather the evidence again against it. The map's plane is the
+    /// sequence (Cauchy-weighted by their distance from the map's plane),
+    /// in a pass before the evidence is gathered against it (no refit
+    /// without evidence: `map.boundary = "hull"`). The map's plane is the
     /// paper's moving average of the last observations, each fitted to the
     /// small patch near normal incidence where the pane echoes: a long
     /// glass wall seen a part at a time keeps the tilt of its last views,
@@ -268,17 +269,16 @@ impl EvidenceGatherer {
         } else {
             0
         };
-        let boundary = landmark.boundary_3d();
-        let centroid = boundary
-            .iter()
-            .fold(nalgebra::Vector3::zeros(), |a, p| a + p.coords)
-            / (boundary.len().max(1) as f64);
+        let reference = landmark
+            .boundary
+            .centroid()
+            .map_or(landmark.chart.origin, |c| landmark.chart.to_3d(&c));
         Some(Self {
             landmark: landmark.clone(),
             others: Vec::new(),
             empty,
             params: *params,
-            reference: Point3::from(centroid),
+            reference,
         })
     }
 
@@ -390,7 +390,6 @@ impl EvidenceTotal {
             params,
             glass_echoes,
             single_echoes,
-            ..
         } = self;
         // Single echoes on the plane: opaque when brighter than the
         // landmark's glass echoes by the ratio, glass otherwise (all opaque

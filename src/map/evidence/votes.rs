@@ -139,16 +139,14 @@ impl<'a> PlaneTests<'a> {
         })
     }
 
-    /// Whether point `i`, on the plane (`c`), is a glass echo: a surface
-    /// echo with a return behind the plane, on a surface that lies along
-    /// the plane (not one crossing it), and not the echo of another
-    /// landmark its beam meets nearer normal incidence.
+    /// Whether point `i`, on the plane (`c`), with the other return `j` of
+    /// its beam, is a glass echo: a surface echo with that return behind
+    /// the plane, on a surface that lies along the plane (not one crossing
+    /// it), and not the echo of another landmark its beam meets nearer
+    /// normal incidence.
     #[inline]
-    fn is_glass_echo(&self, i: usize, c: &Crossing) -> bool {
-        let (f, p) = (self.f, self.p);
-        f.scan
-            .partner(i)
-            .is_some_and(|j| f.frame.points[j].range() - c.t > p.behind)
+    fn is_glass_echo(&self, i: usize, j: usize, c: &Crossing) -> bool {
+        self.f.frame.points[j].range() - c.t > self.p.behind
             && !self.crosses(i)
             && !self.owned_by_other(&c.x, &c.dir)
     }
@@ -215,14 +213,19 @@ pub(super) fn vote_frame(
                 }
             }
         } else if c.s.abs() <= p.surface_band {
-            if f.scan.partner(i).is_none() {
+            match f.scan.partner(i) {
                 // The beam ended on the plane.
-                if plane.plane.normal.dot(&c.dir).abs() < cos_peak {
-                    votes.single_echoes.push((c.uv, pt.intensity));
+                None => {
+                    if plane.plane.normal.dot(&c.dir).abs() < cos_peak {
+                        votes.single_echoes.push((c.uv, pt.intensity));
+                    }
                 }
-            } else if tests.is_glass_echo(i, &c) {
-                grid.vote_echo(&c.uv);
-                votes.glass_echo_intensity.push(pt.intensity);
+                Some(j) => {
+                    if tests.is_glass_echo(i, j, &c) {
+                        grid.vote_echo(&c.uv);
+                        votes.glass_echo_intensity.push(pt.intensity);
+                    }
+                }
             }
         }
     }
@@ -246,13 +249,13 @@ pub(super) fn sum_glass_echoes(
 ) {
     let tests = PlaneTests::new(plane, others, f, p);
     for (i, pt) in f.frame.points.iter().enumerate() {
-        if f.scan.partner(i).is_none() {
+        let Some(j) = f.scan.partner(i) else {
             continue;
-        }
+        };
         let Some(c) = tests.crossing(pt.position(), extent) else {
             continue;
         };
-        if c.s.abs() <= p.surface_band && tests.is_glass_echo(i, &c) {
+        if c.s.abs() <= p.surface_band && tests.is_glass_echo(i, j, &c) {
             let z = 2.0 * c.sd / p.surface_band;
             sums.add(&(f.pose * c.x), 1.0 / (1.0 + z * z));
         }
