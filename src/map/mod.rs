@@ -8,6 +8,7 @@
 pub mod boundary_fit;
 pub mod direct;
 pub mod evidence;
+pub mod ghosts;
 pub mod landmark;
 pub mod merge;
 pub mod panes;
@@ -17,6 +18,7 @@ pub use evidence::{
     gather_evidence, open_where_crossed, passed_through, path_crossings, EvidenceFrame,
     EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
 };
+pub use ghosts::{find_ghosts, Ghost, GhostParams};
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};

@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EvidenceParams, LandmarkSelection, MergeParams, PaneParams};
+use super::{EvidenceParams, GhostParams, LandmarkSelection, MergeParams, PaneParams};
 
 /// Map mergers selectable by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -55,6 +55,9 @@ pub struct MapParams {
     pub evidence: EvidenceParams,
     /// Pane segmentation and boundary fitting (panes boundary).
     pub panes: PaneParams,
+    /// Landmarks that are reflections of seen surfaces in other glass
+    /// (tested once the sequence's surfaces are known).
+    pub ghosts: GhostParams,
 }
 
 impl MapParams {
@@ -78,6 +81,7 @@ impl Default for MapParams {
             merge: MergeParams::default(),
             boundary: BoundaryMode::Hull,
             evidence: EvidenceParams::default(),
+            ghosts: GhostParams::default(),
             panes: PaneParams::default(),
         }
     }

@@ -15,7 +15,7 @@ use crate::classify::{
     BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
 use crate::cloud::Frame;
-use crate::map::passed_through;
+use crate::map::{find_ghosts, passed_through, GhostParams};
 use crate::pipeline::{Sequence, StageTimings};
 use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{BoundedPlane, Detection, EchoHistogram, EchoSplit};
@@ -64,6 +64,8 @@ pub(super) struct Seen {
     pub(super) space: Option<SpaceMap>,
     /// The landmarks as classified: with their echo splits, when learned.
     pub(super) planes: Vec<BoundedPlane>,
+    /// Indices into the planes passed in of those kept (ghosts dropped).
+    pub(super) kept: Vec<usize>,
 }
 
 impl<'a> FrameViews<'a> {
@@ -76,6 +78,7 @@ impl<'a> FrameViews<'a> {
         &self,
         planes: Vec<BoundedPlane>,
         crossing_radius: f64,
+        ghosts: &GhostParams,
         timings: &mut StageTimings,
     ) -> Result<Seen> {
         let p = self.classifier.params();
@@ -102,6 +105,7 @@ impl<'a> FrameViews<'a> {
             .iter()
             .map(|p| Point3::from(p.translation.vector))
             .collect();
+        let (planes, kept) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
@@ -122,6 +126,7 @@ impl<'a> FrameViews<'a> {
             support,
             space,
             planes,
+            kept,
         })
     }
 
@@ -410,4 +415,32 @@ impl<'a> FrameViews<'a> {
             })
             .collect())
     }
+}
+
+/// The planes without the ghosts among them ([`find_ghosts`] against the
+/// sequence's surfaces seen directly), and the indices of those kept.
+fn drop_ghosts(
+    planes: Vec<BoundedPlane>,
+    path: &[Point3<f64>],
+    params: &GhostParams,
+    support: Option<&WorldSupport>,
+) -> (Vec<BoundedPlane>, Vec<usize>) {
+    let ghosts = match support {
+        Some(support) => find_ghosts(&planes, path, params, |p, r| support.near_world(p, r)),
+        None => Vec::new(),
+    };
+    for g in &ghosts {
+        tracing::info!(
+            plane = g.ghost,
+            glass = g.glass,
+            share = g.share,
+            "ghost landmark dropped: a reflection of seen surfaces"
+        );
+    }
+    planes
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| !ghosts.iter().any(|g| g.ghost == *i))
+        .map(|(i, p)| (p, i))
+        .unzip()
 }

@@ -101,7 +101,12 @@ pub fn run_plane_optimized_into(
         poses,
     };
     let crossing_radius = config.map.evidence.crossing_radius;
-    let seen = views.what_keyframes_saw(fused.planes, crossing_radius, &mut timings)?;
+    let seen = views.what_keyframes_saw(
+        fused.planes,
+        crossing_radius,
+        &config.map.ghosts,
+        &mut timings,
+    )?;
 
     // 5. Classify every frame against the map.
     let score = classify_pass::classify_frames(&views, &seen, &frames, sink, &mut timings)?;
@@ -111,7 +116,7 @@ pub fn run_plane_optimized_into(
     Ok(PlaneOptimizedOutput {
         run: score.finish(Vec::new(), timings),
         map: fused.map,
-        used: fused.used,
+        used: seen.kept.iter().map(|&i| fused.used[i]).collect(),
         planes: seen.planes,
     })
 }
