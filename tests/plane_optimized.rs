@@ -329,3 +329,43 @@ fn a_long_glass_wall_under_range_noise_is_glass_along_its_length() {
     let (without, table) = glass(&off);
     assert!(with > without + 2.0, "{with} against {without}\n{table}");
 }
+
+/// The lobby's north wall seen in its coated east facade appears behind
+/// the glass as a plane with the building across the street showing
+/// through it: the frontend fuses it into a reflective landmark outside
+/// the building, which nothing behind ever proves transmitting, so it is
+/// taken for a mirror and the building becomes Reflections. Its mirror
+/// image across the facade is the north wall, seen directly: with
+/// `map.ghosts` it is dropped, and the building is not called a
+/// reflection behind a mirror (every third frame of the stretch that sees
+/// it).
+#[test]
+fn a_wall_seen_in_coated_glass_is_no_landmark() {
+    let seq = common::simulated_subset("lobby", (240..420).step_by(3));
+    let run = |config: &Config| {
+        let out = run_plane_optimized(&seq, config).unwrap();
+        let behind_mirror =
+            out.run
+                .rules
+                .count(specular::classify::Rule::BehindMirror, Class::Reflection, 6);
+        let outside = out
+            .planes
+            .iter()
+            .filter(|p| {
+                let c = p.boundary.centroid().map(|c| p.chart.to_3d(&c));
+                c.is_some_and(|c| c.x > 34.5)
+            })
+            .count();
+        (behind_mirror, outside, out.run.rules.table())
+    };
+    let on = config("default");
+    assert!(on.map.ghosts.enabled);
+    let (behind_mirror, outside, table) = run(&on);
+    assert_eq!(outside, 0, "{table}");
+    assert_eq!(behind_mirror, 0, "{table}");
+    let mut off = on.clone();
+    off.map.ghosts.enabled = false;
+    let (behind_mirror, outside, table) = run(&off);
+    assert!(outside >= 1, "{table}");
+    assert!(behind_mirror > 2000, "{table}");
+}
