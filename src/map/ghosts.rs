@@ -118,12 +118,13 @@ pub fn find_ghosts(
 /// at most.
 const MAX_POSES: usize = 1000;
 
-/// Whether some pose of `path` could have seen `candidate` through `glass`:
-/// it stands in front of both, and its line of sight to the candidate's
-/// centre crosses the glass within `glass_reach` of its extent. A pane
-/// seen only from the far side of the glass (the same plane mirrored by
-/// chance onto a seen wall, in a building laid out symmetrically) is not
-/// a reflection in it.
+/// Whether `candidate` was seen only through `glass` from the poses of
+/// `path`: some pose stands in front of both, its line of sight to the
+/// candidate's centre crossing the glass within `glass_reach` of its
+/// extent, and no pose in front of the candidate stands behind the glass's
+/// plane. A pane seen from the far side of the glass, or from between the
+/// two, is real wherever its mirror image lands (in a building laid out
+/// symmetrically about a glass door, on a wall).
 fn seen_through(
     candidate: &BoundedPlane,
     glass: &BoundedPlane,
@@ -135,17 +136,24 @@ fn seen_through(
     };
     let centre = candidate.chart.to_3d(&centre);
     let step = path.len().div_ceil(MAX_POSES).max(1);
-    path.iter().step_by(step).any(|s| {
-        let (in_front, behind) = (
-            glass.plane.signed_distance(s),
-            glass.plane.signed_distance(&centre),
-        );
-        if !(in_front > 0.0 && behind < 0.0 && candidate.plane.signed_distance(s) > 0.0) {
-            return false;
-        }
-        let crossing = s + (centre - s) * (in_front / (in_front - behind));
-        glass.bounds(&crossing, params.glass_reach)
-    })
+    let poses = || path.iter().step_by(step);
+    // Seen from beyond the glass's plane: a real pane behind it, seen
+    // directly as well (a facade at the end of a corridor with a glass
+    // door across it).
+    let seen_directly = poses()
+        .any(|s| candidate.plane.signed_distance(s) > 0.0 && glass.plane.signed_distance(s) < 0.0);
+    !seen_directly
+        && poses().any(|s| {
+            let (in_front, behind) = (
+                glass.plane.signed_distance(s),
+                glass.plane.signed_distance(&centre),
+            );
+            if !(in_front > 0.0 && behind < 0.0 && candidate.plane.signed_distance(s) > 0.0) {
+                return false;
+            }
+            let crossing = s + (centre - s) * (in_front / (in_front - behind));
+            glass.bounds(&crossing, params.glass_reach)
+        })
 }
 
 /// Points of the plane's reflective extent on a grid (world frame).
@@ -287,6 +295,31 @@ mod tests {
         };
         let path = [Point3::origin(), Point3::new(10.0, 0.0, 1.0)];
         let found = find_ghosts(&[glass, facing_away], &path, &on, wall_seen);
+        assert!(found.is_empty(), "{found:?}");
+    }
+
+    /// A plane also seen from between the glass and itself (a facade at
+    /// the end of a corridor, seen through a glass door across it and,
+    /// past the door, directly) is real, though its mirror image across
+    /// the glass lands on a wall.
+    #[test]
+    fn a_plane_also_seen_directly_is_no_ghost() {
+        let glass = pane(-Vector3::x(), 2.0, Point3::new(2.0, 0.0, 0.0));
+        let facade = pane(-Vector3::x(), 7.0, Point3::new(7.0, 0.0, 0.0));
+        let on = GhostParams {
+            enabled: true,
+            ..GhostParams::default()
+        };
+        let through_only = [Point3::origin()];
+        let found = find_ghosts(
+            &[glass.clone(), facade.clone()],
+            &through_only,
+            &on,
+            wall_seen,
+        );
+        assert_eq!(found.len(), 1, "{found:?}");
+        let also_past_the_door = [Point3::origin(), Point3::new(5.0, 0.0, 1.0)];
+        let found = find_ghosts(&[glass, facade], &also_past_the_door, &on, wall_seen);
         assert!(found.is_empty(), "{found:?}");
     }
 }
