@@ -230,6 +230,14 @@ mod tests {
         BoundedPlane::from_points(plane, corners)
     }
 
+    /// The test on, with its default thresholds.
+    fn switched_on() -> GhostParams {
+        GhostParams {
+            enabled: true,
+            ..GhostParams::default()
+        }
+    }
+
     /// A wall at x = -3 seen directly: within `r` of it.
     fn wall_seen(p: &Point3<f64>, r: f64) -> bool {
         (p.x + 3.0).abs() <= r && p.y.abs() <= 3.0 && (0.0..=3.0).contains(&p.z)
@@ -244,10 +252,7 @@ mod tests {
         let glass = pane(-Vector3::x(), 2.0, Point3::new(2.0, 0.0, 0.0));
         let ghost = pane(-Vector3::x(), 7.0, Point3::new(7.0, 0.0, 0.0));
         let real = pane(-Vector3::x(), 5.0, Point3::new(5.0, 0.0, 0.0));
-        let on = GhostParams {
-            enabled: true,
-            ..GhostParams::default()
-        };
+        let on = switched_on();
         let path = [Point3::origin()];
         let found = find_ghosts(
             &[glass.clone(), ghost.clone(), real.clone()],
@@ -273,10 +278,7 @@ mod tests {
     fn a_plane_not_behind_the_glass_is_no_ghost_of_it() {
         let glass = pane(-Vector3::x(), 2.0, Point3::new(2.0, 0.0, 0.0));
         let side = pane(Vector3::y(), 0.0, Point3::new(2.0, 0.0, 0.0));
-        let on = GhostParams {
-            enabled: true,
-            ..GhostParams::default()
-        };
+        let on = switched_on();
         let everywhere = |_: &Point3<f64>, _: f64| true;
         let found = find_ghosts(&[glass, side], &[Point3::origin()], &on, everywhere);
         assert!(found.is_empty(), "{found:?}");
@@ -289,10 +291,7 @@ mod tests {
     fn a_plane_seen_from_beyond_is_no_ghost() {
         let glass = pane(-Vector3::x(), 2.0, Point3::new(2.0, 0.0, 0.0));
         let facing_away = pane(Vector3::x(), -7.0, Point3::new(7.0, 0.0, 0.0));
-        let on = GhostParams {
-            enabled: true,
-            ..GhostParams::default()
-        };
+        let on = switched_on();
         let path = [Point3::origin(), Point3::new(10.0, 0.0, 1.0)];
         let found = find_ghosts(&[glass, facing_away], &path, &on, wall_seen);
         assert!(found.is_empty(), "{found:?}");
@@ -306,10 +305,7 @@ mod tests {
     fn a_plane_also_seen_directly_is_no_ghost() {
         let glass = pane(-Vector3::x(), 2.0, Point3::new(2.0, 0.0, 0.0));
         let facade = pane(-Vector3::x(), 7.0, Point3::new(7.0, 0.0, 0.0));
-        let on = GhostParams {
-            enabled: true,
-            ..GhostParams::default()
-        };
+        let on = switched_on();
         let through_only = [Point3::origin()];
         let found = find_ghosts(
             &[glass.clone(), facade.clone()],
