@@ -356,16 +356,23 @@ fn a_wall_seen_in_coated_glass_is_no_landmark() {
                 c.is_some_and(|c| c.x > 34.5)
             })
             .count();
-        (behind_mirror, outside, out.run.rules.table())
+        (
+            behind_mirror,
+            outside,
+            out.ghost_lines(),
+            out.run.rules.table(),
+        )
     };
     let on = config("default");
     assert!(on.map.ghosts.enabled);
-    let (behind_mirror, outside, table) = run(&on);
+    let (behind_mirror, outside, ghosts, table) = run(&on);
     assert_eq!(outside, 0, "{table}");
     assert_eq!(behind_mirror, 0, "{table}");
+    assert_eq!(ghosts.len(), 1, "{ghosts:?}");
     let mut off = on.clone();
     off.map.ghosts.enabled = false;
-    let (behind_mirror, outside, table) = run(&off);
+    let (behind_mirror, outside, ghosts, table) = run(&off);
     assert!(outside >= 1, "{table}");
     assert!(behind_mirror > 2000, "{table}");
+    assert!(ghosts.is_empty(), "{ghosts:?}");
 }

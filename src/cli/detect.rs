@@ -110,6 +110,9 @@ pub fn run(args: DetectArgs) -> Result<()> {
             map.used.len(),
             config.map.selection()
         );
+        for line in map.ghost_lines() {
+            println!("{line}");
+        }
     }
     if let Some(conf) = &result.run.confusion {
         print!("{}", conf.metrics().table());

@@ -15,7 +15,7 @@ use crate::classify::{
     BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
 use crate::cloud::Frame;
-use crate::map::{find_ghosts, passed_through, GhostParams};
+use crate::map::{find_ghosts, passed_through, Ghost, GhostParams};
 use crate::pipeline::{Sequence, StageTimings};
 use crate::reflect::echo_split::{echo_strength, is_mirror};
 use crate::reflect::{BoundedPlane, Detection, EchoHistogram, EchoSplit};
@@ -66,6 +66,8 @@ pub(super) struct Seen {
     pub(super) planes: Vec<BoundedPlane>,
     /// Indices into the planes passed in of those kept (ghosts dropped).
     pub(super) kept: Vec<usize>,
+    /// The ghosts dropped (indices into the planes passed in).
+    pub(super) ghosts: Vec<Ghost>,
 }
 
 impl<'a> FrameViews<'a> {
@@ -105,7 +107,7 @@ impl<'a> FrameViews<'a> {
             .iter()
             .map(|p| Point3::from(p.translation.vector))
             .collect();
-        let (planes, kept) = drop_ghosts(planes, &path, ghosts, support.as_ref());
+        let (planes, kept, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
@@ -127,6 +129,7 @@ impl<'a> FrameViews<'a> {
             space,
             planes,
             kept,
+            ghosts,
         })
     }
 
@@ -418,13 +421,14 @@ impl<'a> FrameViews<'a> {
 }
 
 /// The planes without the ghosts among them ([`find_ghosts`] against the
-/// sequence's surfaces seen directly), and the indices of those kept.
+/// sequence's surfaces seen directly), the indices of those kept, and the
+/// ghosts.
 fn drop_ghosts(
     planes: Vec<BoundedPlane>,
     path: &[Point3<f64>],
     params: &GhostParams,
     support: Option<&WorldSupport>,
-) -> (Vec<BoundedPlane>, Vec<usize>) {
+) -> (Vec<BoundedPlane>, Vec<usize>, Vec<Ghost>) {
     let ghosts = match support {
         Some(support) => find_ghosts(&planes, path, params, |p, r| support.near_world(p, r)),
         None => Vec::new(),
@@ -437,10 +441,11 @@ fn drop_ghosts(
             "ghost landmark dropped: a reflection of seen surfaces"
         );
     }
-    planes
+    let (planes, kept) = planes
         .into_iter()
         .enumerate()
         .filter(|(i, _)| !ghosts.iter().any(|g| g.ghost == *i))
         .map(|(i, p)| (p, i))
-        .unzip()
+        .unzip();
+    (planes, kept, ghosts)
 }

@@ -37,7 +37,7 @@ pub use world_maps::{around_corner_map, measured_map, AroundCornerMap, MeasuredM
 use super::registry::plane_map_classifier;
 use super::{FrameSink, RunOutput, Sequence, StageTimings};
 use crate::config::Config;
-use crate::map::PlaneMap;
+use crate::map::{Ghost, PlaneMap};
 use crate::reflect::BoundedPlane;
 use crate::{Error, Result};
 use keyframes::FrameViews;
@@ -54,6 +54,29 @@ pub struct PlaneOptimizedOutput {
     /// The used landmarks as bounded planes (world frame), with their
     /// evidence and panes when gathered; same order as `used`.
     pub planes: Vec<BoundedPlane>,
+    /// Landmarks dropped as reflections of seen surfaces in other glass
+    /// (`map.ghosts`): `ghost` and `glass` index `map.landmarks`.
+    pub ghosts: Vec<Ghost>,
+}
+
+impl PlaneOptimizedOutput {
+    /// One line per ghost landmark dropped, for the report and the console:
+    /// which landmark, seen in which glass, and how much of it mirrors onto
+    /// surfaces seen directly.
+    pub fn ghost_lines(&self) -> Vec<String> {
+        self.ghosts
+            .iter()
+            .map(|g| {
+                let id = |i: usize| self.map.landmarks.get(i).map_or(i, |l| l.id);
+                format!(
+                    "landmark {} dropped as a ghost: the reflection of surfaces seen directly in landmark {} ({:.0} % of its extent mirrors onto them)",
+                    id(g.ghost),
+                    id(g.glass),
+                    100.0 * g.share
+                )
+            })
+            .collect()
+    }
 }
 
 /// Run the plane-optimized pipeline and keep every frame's classes. The
@@ -117,6 +140,15 @@ pub fn run_plane_optimized_into(
         run: score.finish(Vec::new(), timings),
         map: fused.map,
         used: seen.kept.iter().map(|&i| fused.used[i]).collect(),
+        ghosts: seen
+            .ghosts
+            .iter()
+            .map(|g| Ghost {
+                ghost: fused.used[g.ghost],
+                glass: fused.used[g.glass],
+                share: g.share,
+            })
+            .collect(),
         planes: seen.planes,
     })
 }
