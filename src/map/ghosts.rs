@@ -69,10 +69,12 @@ const MIN_SPACING: f64 = 0.2;
 /// within `radius` of `p`) in another of them, with that one.
 ///
 /// A landmark is a ghost of glass `g` when it lies wholly at least
-/// `min_depth` behind `g` (on the side away from the sensors that saw `g`)
-/// and, of the samples of its reflective extent whose foot on `g` falls
-/// within `g`'s extent, at least `min_share` mirror across `g` onto a seen
-/// surface. Ghosts are never used as the glass of another ghost.
+/// `min_depth` behind `g` (on the side away from the sensors that saw `g`),
+/// the poses of `path` saw it only through `g` (never from beyond `g`'s
+/// plane), and, of the samples of its reflective extent whose foot on `g`
+/// falls within `glass_reach` of `g`'s extent, at least `min_share` mirror
+/// across `g` onto a seen surface. Ghosts are never used as the glass of
+/// another ghost.
 pub fn find_ghosts(
     planes: &[BoundedPlane],
     path: &[Point3<f64>],
@@ -106,12 +108,11 @@ pub fn find_ghosts(
     }
     // A ghost does not make ghosts: keep only those whose glass is real.
     let is_ghost = |i: usize| ghosts.iter().any(|g| g.ghost == i);
-    let kept: Vec<Ghost> = ghosts
+    ghosts
         .iter()
         .copied()
         .filter(|g| !is_ghost(g.glass))
-        .collect();
-    kept
+        .collect()
 }
 
 /// Poses of the path tried as the sensor that saw a ghost through glass,
@@ -156,7 +157,10 @@ fn seen_through(
         })
 }
 
-/// Points of the plane's reflective extent on a grid (world frame).
+/// Points of the plane's reflective extent on a grid (world frame), over
+/// the box of its boundary (the hull of what was observed), not of its
+/// panes: a pane's fitted edge may overreach the observations towards the
+/// glass that makes the ghost, and would then fail the depth test.
 fn extent_samples(plane: &BoundedPlane) -> Vec<Point3<f64>> {
     let vertices = plane.boundary.vertices();
     if vertices.len() < 3 {

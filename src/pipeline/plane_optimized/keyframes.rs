@@ -64,9 +64,8 @@ pub(super) struct Seen {
     pub(super) space: Option<SpaceMap>,
     /// The landmarks as classified: with their echo splits, when learned.
     pub(super) planes: Vec<BoundedPlane>,
-    /// Indices into the planes passed in of those kept (ghosts dropped).
-    pub(super) kept: Vec<usize>,
-    /// The ghosts dropped (indices into the planes passed in).
+    /// The ghosts dropped (indices into the planes passed in; `planes`
+    /// holds the others, in order).
     pub(super) ghosts: Vec<Ghost>,
 }
 
@@ -107,7 +106,7 @@ impl<'a> FrameViews<'a> {
             .iter()
             .map(|p| Point3::from(p.translation.vector))
             .collect();
-        let (planes, kept, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
+        let (planes, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
@@ -128,7 +127,6 @@ impl<'a> FrameViews<'a> {
             support,
             space,
             planes,
-            kept,
             ghosts,
         })
     }
@@ -421,14 +419,13 @@ impl<'a> FrameViews<'a> {
 }
 
 /// The planes without the ghosts among them ([`find_ghosts`] against the
-/// sequence's surfaces seen directly), the indices of those kept, and the
-/// ghosts.
+/// sequence's surfaces seen directly), and the ghosts.
 fn drop_ghosts(
     planes: Vec<BoundedPlane>,
     path: &[Point3<f64>],
     params: &GhostParams,
     support: Option<&WorldSupport>,
-) -> (Vec<BoundedPlane>, Vec<usize>, Vec<Ghost>) {
+) -> (Vec<BoundedPlane>, Vec<Ghost>) {
     let ghosts = match support {
         Some(support) => find_ghosts(&planes, path, params, |p, r| support.near_world(p, r)),
         None => Vec::new(),
@@ -441,11 +438,11 @@ fn drop_ghosts(
             "ghost landmark dropped: a reflection of seen surfaces"
         );
     }
-    let (planes, kept) = planes
+    let planes = planes
         .into_iter()
         .enumerate()
         .filter(|(i, _)| !ghosts.iter().any(|g| g.ghost == *i))
-        .map(|(i, p)| (p, i))
-        .unzip();
-    (planes, kept, ghosts)
+        .map(|(_, p)| p)
+        .collect();
+    (planes, ghosts)
 }

@@ -139,7 +139,13 @@ pub fn run_plane_optimized_into(
     Ok(PlaneOptimizedOutput {
         run: score.finish(Vec::new(), timings),
         map: fused.map,
-        used: seen.kept.iter().map(|&i| fused.used[i]).collect(),
+        used: fused
+            .used
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !seen.ghosts.iter().any(|g| g.ghost == *i))
+            .map(|(_, &l)| l)
+            .collect(),
         ghosts: seen
             .ghosts
             .iter()
