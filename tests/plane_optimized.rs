@@ -376,3 +376,38 @@ fn a_wall_seen_in_coated_glass_is_no_landmark() {
     assert!(behind_mirror > 2000, "{table}");
     assert!(ghosts.is_empty(), "{ghosts:?}");
 }
+
+/// Two panes look out on a hedge 4 m beyond them. Where the hedge stands
+/// beside the room, its mirror image across the panes lands just behind
+/// the room's side wall, within the support radius of the wall: with
+/// `support_behind_test` such an image is no reflection of the wall (the
+/// reflected beam would have ended on it), and the hedge is an Obstacle;
+/// the wall's true reflections keep their support (every second frame).
+#[test]
+fn a_mirror_image_behind_a_seen_wall_is_not_supported_by_it() {
+    let seq = common::simulated_subset("two-panes", (0..81).step_by(2));
+    let run = |config: &Config| {
+        let out = run_plane_optimized(&seq, config).unwrap();
+        let rules = &out.run.rules;
+        (
+            rules.count(specular::classify::Rule::Support, Class::Reflection, 6),
+            rules.count(specular::classify::Rule::Support, Class::Reflection, 5),
+            rules.table(),
+        )
+    };
+    let on = config("default");
+    assert!(on.plane_map.decision.support_behind_test);
+    let (obstacles_on, reflections_on, table_on) = run(&on);
+    let mut off = on.clone();
+    off.plane_map.decision.support_behind_test = false;
+    let (obstacles_off, reflections_off, table_off) = run(&off);
+    eprintln!("on:\n{table_on}\noff:\n{table_off}");
+    assert!(
+        obstacles_on + 400 < obstacles_off,
+        "obstacles called reflections by support: {obstacles_on} on, {obstacles_off} off"
+    );
+    assert!(
+        reflections_on as f64 >= 0.999 * reflections_off as f64,
+        "reflections kept by support: {reflections_on} on, {reflections_off} off"
+    );
+}

@@ -11,7 +11,7 @@
 //! matters because it is rebuilt for every run over all frames. The buckets
 //! are ranges of one flat array (a counting sort), not a vector each.
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 use super::decide::SurfaceSupport;
 use crate::geometry::fastmath::floor_i64;
@@ -25,6 +25,12 @@ pub struct WorldSupport {
     /// Bucket `b` holds `points[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
     points: Vec<[f32; 3]>,
+    /// Per point, the unit direction towards the sensor that first saw it,
+    /// times 127 (only its side of the surface is used).
+    views: Vec<[i8; 3]>,
+    /// Images more than this behind the surface at their nearest point are
+    /// not supported, m (infinite: no such test).
+    behind: f64,
 }
 
 impl std::fmt::Debug for WorldSupport {
@@ -34,6 +40,24 @@ impl std::fmt::Debug for WorldSupport {
             .field("radius", &self.radius)
             .finish()
     }
+}
+
+/// Kept points within this distance of a surface point give its normal, m
+/// (three support voxels at the default 0.05 m).
+const NORMAL_REACH: f64 = 0.15;
+
+/// Fewer kept points than this near a surface point give no normal.
+const MIN_NORMAL_POINTS: usize = 6;
+
+/// A surface is flat where its least spread is at most this share of the
+/// next (a thin edge or a corner is not).
+const MAX_FLATNESS: f64 = 0.1;
+
+/// Squared distance of two points.
+#[inline]
+fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
+    let (x, y, z) = (a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+    x * x + y * y + z * z
 }
 
 /// A cube's integer coordinates packed into one key: 21 bits per axis, two's
@@ -53,8 +77,9 @@ pub struct SupportBuilder {
     inv: f64,
     seen: VoxelSet,
     buckets: FxHashMap<u64, u32>,
-    /// The kept points with their bucket numbers.
-    kept: Vec<(u32, [f32; 3])>,
+    /// The kept points with their bucket numbers and view directions.
+    kept: Vec<(u32, [f32; 3], [i8; 3])>,
+    behind: f64,
     /// Points per bucket.
     counts: Vec<u32>,
     /// Consecutive points mostly share a bucket: the last one.
@@ -74,11 +99,21 @@ impl SupportBuilder {
             kept: Vec::new(),
             counts: Vec::new(),
             last: None,
+            behind: f64::INFINITY,
         }
     }
 
-    /// Offer world-frame points (the first of each voxel is kept).
-    pub fn extend(&mut self, points: impl IntoIterator<Item = Point3<f64>>) {
+    /// Support no mirror image more than `behind` metres behind the
+    /// surface at the kept point nearest to it (see
+    /// [`WorldSupport::near_world`]).
+    pub fn with_behind(mut self, behind: f64) -> Self {
+        self.behind = behind;
+        self
+    }
+
+    /// Offer world-frame points seen from `origin` (the first of each voxel
+    /// is kept).
+    pub fn extend(&mut self, origin: Point3<f64>, points: impl IntoIterator<Item = Point3<f64>>) {
         let inv = self.inv;
         for p in points {
             let xyz = [p.x, p.y, p.z];
@@ -103,7 +138,10 @@ impl SupportBuilder {
                 }
             };
             self.counts[b as usize] += 1;
-            self.kept.push((b, [p.x as f32, p.y as f32, p.z as f32]));
+            let view = (origin - p).try_normalize(0.0).unwrap_or_default();
+            let view = [view.x, view.y, view.z].map(|c| (c * 127.0).round() as i8);
+            self.kept
+                .push((b, [p.x as f32, p.y as f32, p.z as f32], view));
         }
     }
 
@@ -119,9 +157,11 @@ impl SupportBuilder {
         }
         let mut fill: Vec<u32> = starts[..self.counts.len()].to_vec();
         let mut flat = vec![[0f32; 3]; self.kept.len()];
-        for (b, q) in self.kept {
+        let mut views = vec![[0i8; 3]; self.kept.len()];
+        for (b, q, v) in self.kept {
             let slot = &mut fill[b as usize];
             flat[*slot as usize] = q;
+            views[*slot as usize] = v;
             *slot += 1;
         }
         WorldSupport {
@@ -129,6 +169,8 @@ impl SupportBuilder {
             buckets: self.buckets,
             starts,
             points: flat,
+            views,
+            behind: self.behind,
         }
     }
 }
@@ -139,7 +181,7 @@ impl WorldSupport {
     /// queries of radius up to `radius`.
     pub fn build(points: impl IntoIterator<Item = Point3<f64>>, voxel: f64, radius: f64) -> Self {
         let mut builder = SupportBuilder::new(voxel, radius);
-        builder.extend(points);
+        builder.extend(Point3::origin(), points);
         builder.finish()
     }
 
@@ -153,29 +195,100 @@ impl WorldSupport {
         self.points.is_empty()
     }
 
-    /// Whether a kept point lies within `radius` of `p` (world frame);
-    /// `radius` is clamped to the radius the support was built for.
+    /// Whether a kept point lies within `radius` of `p` (world frame) that
+    /// supports `p` as a mirror image: with the behind test on
+    /// ([`SupportBuilder::with_behind`]), an image more than `behind`
+    /// metres behind the surface at its nearest kept point is not
+    /// supported. `radius` is clamped to the radius the support was built
+    /// for.
     pub fn near_world(&self, p: &Point3<f64>, radius: f64) -> bool {
         let r = radius.min(self.radius);
+        let q = [p.x as f32, p.y as f32, p.z as f32];
         let r2 = (r * r) as f32;
+        // Within `behind` of a kept point an image is on that surface, from
+        // whichever side: the common case ends the search there.
+        let on = self.behind.min(r);
+        let on2 = (on * on) as f32;
+        let mut nearest: Option<(f32, usize)> = None;
+        let on_surface = self.any_in_ball(p, r, |i, point| {
+            let d2 = dist2(point, &q);
+            if d2 <= r2 && nearest.is_none_or(|(n, _)| d2 < n) {
+                nearest = Some((d2, i));
+            }
+            d2 <= on2
+        });
+        on_surface || nearest.is_some_and(|(_, i)| !self.behind_surface_at(p, i))
+    }
+
+    /// Whether `p` lies more than `behind` metres behind the surface at kept
+    /// point `i`: along that surface's normal (the least spread of the kept
+    /// points within [`NORMAL_REACH`]) turned towards where `i` was seen
+    /// from. `false` where the points there make no plane.
+    fn behind_surface_at(&self, p: &Point3<f64>, i: usize) -> bool {
+        let s = self.points[i].map(f64::from);
+        let s = Point3::new(s[0], s[1], s[2]);
+        let reach2 = (NORMAL_REACH * NORMAL_REACH) as f32;
+        let centre = [s.x as f32, s.y as f32, s.z as f32];
+        let (mut n, mut sum, mut outer) = (0usize, Vector3::zeros(), Matrix3::zeros());
+        self.any_in_ball(&s, NORMAL_REACH, |_, point| {
+            if dist2(point, &centre) <= reach2 {
+                let d = Vector3::from(point.map(f64::from)) - s.coords;
+                n += 1;
+                sum += d;
+                outer += d * d.transpose();
+            }
+            false
+        });
+        if n < MIN_NORMAL_POINTS {
+            return false;
+        }
+        let mean = sum / n as f64;
+        let spread = (outer / n as f64 - mean * mean.transpose()).symmetric_eigen();
+        let mut order = [0usize, 1, 2];
+        order.sort_by(|&a, &b| spread.eigenvalues[a].total_cmp(&spread.eigenvalues[b]));
+        if spread.eigenvalues[order[0]] > MAX_FLATNESS * spread.eigenvalues[order[1]] {
+            return false;
+        }
+        let normal = spread.eigenvectors.column(order[0]).into_owned();
+        let view = Vector3::from(self.views[i].map(f64::from));
+        let depth = normal.dot(&(p - s)) * normal.dot(&view).signum();
+        depth < -self.behind
+    }
+
+    /// Call `f` on every kept point (index and position) in the cubes that
+    /// the ball of `reach` around `c` overlaps (one or two per axis, `reach`
+    /// at most the support's radius), until it returns `true`; whether it
+    /// did.
+    fn any_in_ball(
+        &self,
+        c: &Point3<f64>,
+        reach: f64,
+        mut f: impl FnMut(usize, &[f32; 3]) -> bool,
+    ) -> bool {
         let inv = 1.0 / self.radius;
-        let xyz = [p.x, p.y, p.z];
-        // The cubes the query ball overlaps: one or two per axis.
-        let lo = xyz.map(|v| floor_i64((v - r) * inv));
-        let hi = xyz.map(|v| floor_i64((v + r) * inv));
-        let q = xyz.map(|v| v as f32);
+        let xyz = [c.x, c.y, c.z];
+        let lo = xyz.map(|v| floor_i64((v - reach) * inv));
+        let hi = xyz.map(|v| floor_i64((v + reach) * inv));
+        // The cube holding `c` first: the nearest points are most often
+        // there, and a search that stops at one stops soonest.
+        let home = xyz.map(|v| floor_i64(v * inv));
+        let mut visit = |cube: [i64; 3]| {
+            let Some(&b) = self.buckets.get(&bucket_key(cube)) else {
+                return false;
+            };
+            let start = self.starts[b as usize] as usize;
+            let end = self.starts[b as usize + 1] as usize;
+            (start..end)
+                .zip(&self.points[start..end])
+                .any(|(i, point)| f(i, point))
+        };
+        if visit(home) {
+            return true;
+        }
         for cx in lo[0]..=hi[0] {
             for cy in lo[1]..=hi[1] {
                 for cz in lo[2]..=hi[2] {
-                    let Some(&b) = self.buckets.get(&bucket_key([cx, cy, cz])) else {
-                        continue;
-                    };
-                    let range =
-                        self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    if self.points[range].iter().any(|b| {
-                        let (x, y, z) = (b[0] - q[0], b[1] - q[1], b[2] - q[2]);
-                        x * x + y * y + z * z <= r2
-                    }) {
+                    if [cx, cy, cz] != home && visit([cx, cy, cz]) {
                         return true;
                     }
                 }
@@ -229,6 +342,73 @@ mod tests {
                 if fast {
                     assert!(pts.iter().any(|p| (p - q).norm() <= r + 1e-5));
                 }
+            }
+        }
+    }
+
+    /// A wall at x = 0 seen from x = 3: a mirror image 0.3 m behind it is
+    /// not supported with the behind test, and is without; one 0.1 m behind
+    /// it, one in front of it and one beside its edge are supported either
+    /// way.
+    #[test]
+    fn an_image_behind_a_seen_wall_is_not_supported() {
+        let wall: Vec<Point3<f64>> = (-25..=25)
+            .flat_map(|i| {
+                (-25..=25).map(move |k| Point3::new(0.0, i as f64 * 0.04, k as f64 * 0.04))
+            })
+            .collect();
+        let build = |behind: Option<f64>| {
+            let mut b = SupportBuilder::new(0.01, 0.316);
+            if let Some(behind) = behind {
+                b = b.with_behind(behind);
+            }
+            b.extend(Point3::new(3.0, 0.5, 0.2), wall.iter().copied());
+            b.finish()
+        };
+        let (on, off) = (build(Some(0.2)), build(None));
+        let behind = Point3::new(-0.3, 0.1, 0.0);
+        assert!(!on.near_world(&behind, 0.316));
+        assert!(off.near_world(&behind, 0.316));
+        for supported in [
+            Point3::new(-0.1, 0.1, 0.0),
+            Point3::new(0.3, 0.1, 0.0),
+            Point3::new(0.0, 1.25, 0.0),
+            Point3::new(-0.05, 1.2, 0.3),
+        ] {
+            assert!(on.near_world(&supported, 0.316), "{supported}");
+            assert!(off.near_world(&supported, 0.316), "{supported}");
+        }
+    }
+
+    /// With the behind test a supported image still has a kept point within
+    /// the radius, and one with a kept point within the behind distance is
+    /// supported, on random surfaces seen from random places.
+    #[test]
+    fn the_behind_test_keeps_the_radius_bounds() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut b = SupportBuilder::new(1e-6, 0.3).with_behind(0.1);
+        let mut pts = Vec::new();
+        for _ in 0..20 {
+            let origin = Point3::new(rng.unit() * 6.0 - 3.0, rng.unit() * 6.0 - 3.0, 1.0);
+            let batch: Vec<Point3<f64>> = (0..100)
+                .map(|_| Point3::new(rng.unit() * 4.0 - 2.0, rng.unit() * 4.0 - 2.0, rng.unit()))
+                .collect();
+            b.extend(origin, batch.iter().copied());
+            pts.extend(batch);
+        }
+        let support = b.finish();
+        for _ in 0..500 {
+            let q = Point3::new(rng.unit() * 5.0 - 2.5, rng.unit() * 5.0 - 2.5, rng.unit());
+            let nearest = pts
+                .iter()
+                .map(|p| (p - q).norm())
+                .fold(f64::INFINITY, f64::min);
+            let near = support.near_world(&q, 0.3);
+            if nearest <= 0.1 - 1e-5 {
+                assert!(near, "{q}: a point {nearest} away");
+            }
+            if near {
+                assert!(nearest <= 0.3 + 1e-5, "{q}: nearest {nearest}");
             }
         }
     }

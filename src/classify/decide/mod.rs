@@ -108,6 +108,17 @@ pub struct DecisionParams {
     /// behind a glass door leaf parked against it), which is no evidence of
     /// a reflection.
     pub support_excludes_own_surface: bool,
+    /// The sequence's seen surfaces support a mirror image only where it
+    /// does not lie more than [`support_behind`](Self::support_behind)
+    /// behind the nearest of them (along that surface's normal, turned
+    /// towards the sensor that saw it): a reflected beam would have ended
+    /// on that surface, so an image behind it is no reflection of it (a
+    /// hedge outside a window mirrors to behind the room's side wall, within
+    /// the support radius of the wall).
+    pub support_behind_test: bool,
+    /// How far behind a seen surface a mirror image may lie and still be
+    /// supported by it, m: the mirror plane's and the poses' errors.
+    pub support_behind: f64,
     /// Use the dual-return rule (the near return of an obstacle beam is a
     /// reflection).
     pub dual_return_rule: bool,
@@ -186,6 +197,8 @@ impl Default for DecisionParams {
             support_range: 0.1,
             support_radius: 0.0,
             support_excludes_own_surface: false,
+            support_behind_test: false,
+            support_behind: 0.2,
             dual_return_rule: true,
             dual_gap: 0.1,
             ambiguous: Class::Unclassified,

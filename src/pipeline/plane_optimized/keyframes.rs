@@ -199,6 +199,9 @@ impl<'a> FrameViews<'a> {
     ) -> Result<WorldSupport> {
         let p = self.classifier.params();
         let mut builder = SupportBuilder::new(p.support_voxel, p.decision.support_radius);
+        if p.decision.support_behind_test {
+            builder = builder.with_behind(p.decision.support_behind);
+        }
         self.pass(
             frames,
             planes,
@@ -207,13 +210,15 @@ impl<'a> FrameViews<'a> {
             |input, hits| {
                 let (r, t) = rotation_translation(&input.pose);
                 let points = &input.frame.points;
-                self.classifier
+                let world = self
+                    .classifier
                     .surface_points(input, hits)
                     .into_iter()
                     .map(|i| Point3::from(r * points[i as usize].position().coords + t))
-                    .collect::<Vec<_>>()
+                    .collect::<Vec<_>>();
+                (Point3::from(t), world)
             },
-            |points| builder.extend(points),
+            |(origin, points)| builder.extend(origin, points),
         )?;
         let start = Instant::now();
         let support = builder.finish();
