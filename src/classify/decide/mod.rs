@@ -179,6 +179,15 @@ pub struct DecisionParams {
     /// where it was measured; Normal otherwise. The space seen directly
     /// takes no surface from such beams.
     pub unseen_extent: f64,
+    /// A beam that crossed a landmark's extent within this distance of its
+    /// edge may have passed beside it, m (0: off): the panes are fitted on
+    /// the evidence grid's 0.2 m cells and overreach by up to about half a
+    /// cell. Such a beam is no evidence that the landmark transmits (its
+    /// mirror test counts only beams well inside), and behind a mirror the
+    /// point it reached is Normal where the space seen directly says it is
+    /// real (its mirror image refuted, or a surface seen there): seen past
+    /// the mirror's edge, not through it.
+    pub pane_edge_margin: f64,
 }
 
 impl Default for DecisionParams {
@@ -211,6 +220,7 @@ impl Default for DecisionParams {
             seen_surface_echo_reach: 0.0,
             echo_strength_past_second_pane: false,
             unseen_extent: 0.0,
+            pane_edge_margin: 0.0,
         }
     }
 }
@@ -220,6 +230,32 @@ impl Default for DecisionParams {
 /// ([`DecisionParams::support_excludes_own_surface`]).
 fn supports_itself(params: &DecisionParams, p: &Point3<f64>, mirrored: &Point3<f64>) -> bool {
     params.support_excludes_own_surface && (mirrored - p).norm() <= params.support_radius
+}
+
+/// Whether the beam towards `p`, crossing `bp` at range `t`, crossed it
+/// within `margin` of its extent's edge ([`DecisionParams::pane_edge_margin`];
+/// never with `margin` 0).
+pub(crate) fn near_pane_edge(bp: &BoundedPlane, p: &Point3<f64>, t: f64, margin: f64) -> bool {
+    margin > 0.0 && !bp.bounds(&Point3::from(p.coords * (t / p.coords.norm())), -margin)
+}
+
+/// The rule by which the space seen directly says behind-plane point `p`
+/// is real where it was measured: its mirror image refuted
+/// ([`two_hypotheses`]), or a surface seen there (the seen-surface test).
+/// `None` without that evidence.
+fn real_by_space(
+    space: Option<&SensorFrameSpace<'_>>,
+    support: Option<&dyn SurfaceSupport>,
+    bp: &BoundedPlane,
+    p: &Point3<f64>,
+    params: &DecisionParams,
+) -> Option<Rule> {
+    let space = space.filter(|_| params.space_test)?;
+    if two_hypotheses(space, support, &bp.plane, p, params) == Verdict::Real {
+        return Some(Rule::MirrorRefuted);
+    }
+    (params.seen_surface_test && space.occupancy(p) == Occupancy::Occupied)
+        .then_some(Rule::SeenSurface)
 }
 
 /// Answers "is there an observed surface near this point" (sensor frame),
@@ -416,9 +452,16 @@ pub fn decide_with_hits(
             params.glass_distance,
             params.behind_distance,
         );
-        // Behind a mirror nothing is real.
+        // Behind a mirror nothing is real, unless the beam may have passed
+        // beside it.
         if bp.mirror && single_pane {
-            (classes[i], rules[i]) = (Class::Reflection, Rule::BehindMirror);
+            let seen_beside = near_pane_edge(bp, &p, t, params.pane_edge_margin)
+                .then(|| real_by_space(space, support, bp, &p, params))
+                .flatten();
+            (classes[i], rules[i]) = match seen_beside {
+                Some(rule) => (Class::Normal, rule),
+                None => (Class::Reflection, Rule::BehindMirror),
+            };
             continue;
         }
         let mirrored = bp.plane.mirror(&p);

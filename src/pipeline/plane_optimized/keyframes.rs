@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Point3};
 
 use super::world_maps::rotation_translation;
 use crate::classify::boundary::BeamPlanes;
-use crate::classify::decide::{two_hypotheses, SurfaceSupport, Verdict};
+use crate::classify::decide::{near_pane_edge, two_hypotheses, SurfaceSupport, Verdict};
 use crate::classify::{
     BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
@@ -333,8 +333,7 @@ impl<'a> FrameViews<'a> {
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
         let blocked_paths = p.echo_split.mirror_blocked_paths;
-        let empty =
-            || vec![(EchoHistogram::default(), EchoHistogram::default(), 0u64); planes.len()];
+        let empty = || vec![BehindEchoes::default(); planes.len()];
         let mut totals = empty();
         self.pass(
             frames,
@@ -361,13 +360,25 @@ impl<'a> FrameViews<'a> {
                     {
                         continue;
                     }
+                    // A beam near the extent's edge may have passed beside
+                    // the landmark: no evidence of what it does to light.
+                    let near_edge = near_pane_edge(
+                        &sensor_planes[h.plane],
+                        &pos,
+                        h.range,
+                        p.decision.pane_edge_margin,
+                    );
                     let cos = if incidence {
                         inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
                     } else {
                         1.0
                     };
                     let strength = echo_strength(pt.intensity, range, exponent, cos);
-                    out[h.plane].0.add(strength);
+                    let stats = &mut out[h.plane];
+                    stats.all.add(strength);
+                    if !near_edge {
+                        stats.inside.add(strength);
+                    }
                     let mirrored = sensor_planes[h.plane].plane.mirror(&pos);
                     // A glass echo of a second pane behind this one is
                     // transmitted by this one, but its strength is that
@@ -380,7 +391,7 @@ impl<'a> FrameViews<'a> {
                     let anchor =
                         view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free;
                     if anchor {
-                        out[h.plane].1.add(strength);
+                        stats.anchors.add(strength);
                     }
                     let transmitted = if blocked_paths {
                         let plane = &sensor_planes[h.plane].plane;
@@ -388,31 +399,28 @@ impl<'a> FrameViews<'a> {
                     } else {
                         anchor
                     };
-                    out[h.plane].2 += u64::from(transmitted);
+                    stats.transmitted_inside += u64::from(transmitted && !near_edge);
                 }
                 out
             },
             |frame_counts| {
-                for ((all, anchors, transmitted), (all_f, anchors_f, transmitted_f)) in
-                    totals.iter_mut().zip(&frame_counts)
-                {
-                    all.merge(all_f);
-                    anchors.merge(anchors_f);
-                    *transmitted += transmitted_f;
+                for (total, frame) in totals.iter_mut().zip(&frame_counts) {
+                    total.merge(frame);
                 }
             },
         )?;
         Ok(totals
             .into_iter()
             .enumerate()
-            .map(|(j, (all, anchors, transmitted))| {
-                let split = EchoSplit::fit(&all, &anchors, &p.echo_split, exponent);
-                let mirror = is_mirror(&all, transmitted, &p.echo_split);
+            .map(|(j, t)| {
+                let split = EchoSplit::fit(&t.all, &t.anchors, &p.echo_split, exponent);
+                let mirror = is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
                 tracing::debug!(
                     plane = j,
-                    behind = all.total(),
-                    anchors = anchors.total(),
-                    transmitted,
+                    behind = t.all.total(),
+                    anchors = t.anchors.total(),
+                    inside = t.inside.total(),
+                    transmitted_inside = t.transmitted_inside,
                     ?split,
                     mirror,
                     "echo split"
@@ -450,4 +458,28 @@ fn drop_ghosts(
         .map(|(_, p)| p)
         .collect();
     (planes, ghosts)
+}
+
+/// The echoes behind one landmark over the keyframes (integer counts: the
+/// sum does not depend on the order or the threads).
+#[derive(Debug, Clone, Default)]
+struct BehindEchoes {
+    /// The strengths of every point behind it (its echo split).
+    all: EchoHistogram,
+    /// ... of those transmitted for sure (the split's orientation).
+    anchors: EchoHistogram,
+    /// ... of those whose beam crossed it well inside its extent (its
+    /// mirror test: a beam near the edge may have passed beside it).
+    inside: EchoHistogram,
+    /// Points of `inside` that are real where measured.
+    transmitted_inside: u64,
+}
+
+impl BehindEchoes {
+    fn merge(&mut self, other: &Self) {
+        self.all.merge(&other.all);
+        self.anchors.merge(&other.anchors);
+        self.inside.merge(&other.inside);
+        self.transmitted_inside += other.transmitted_inside;
+    }
 }

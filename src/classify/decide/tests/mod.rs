@@ -170,6 +170,29 @@ fn a_point_in_space_seen_free_is_a_reflection() {
     assert_eq!(without.rules, [Rule::Undecided]);
 }
 
+/// Behind a mirror nothing is real, except past its edge: a point whose
+/// beam crossed the mirror within `pane_edge_margin` of its edge, and whose
+/// mirror image lies in the room's seen-free air, was seen beside the
+/// mirror (Normal). Deep inside the extent a point stays a Reflection, and
+/// without the margin so does the one near the edge.
+#[test]
+fn a_point_seen_past_a_mirrors_edge_is_normal() {
+    let mut planes = pane();
+    planes[0].mirror = true;
+    // The pane ends at y = 2: the first beam crosses it at y = 1.93, the
+    // second at y = 0.18.
+    let points = [[5.5f32, 2.123, 0.3], [5.5, 0.2, 0.3]];
+    let on = DecisionParams {
+        pane_edge_margin: 0.15,
+        ..rule_only(true)
+    };
+    let with = decide_in(&points, 50.0, &planes, &on, &room_space());
+    assert_eq!(with.classes, [Class::Normal, Class::Reflection]);
+    assert_eq!(with.rules, [Rule::MirrorRefuted, Rule::BehindMirror]);
+    let without = decide_in(&points, 50.0, &planes, &rule_only(true), &room_space());
+    assert_eq!(without.classes, [Class::Reflection, Class::Reflection]);
+}
+
 /// The echo split decides a behind-plane point by its strength, only
 /// where the landmark has one.
 #[test]
