@@ -47,12 +47,15 @@ use serde::{Deserialize, Serialize};
 mod beam_hits;
 mod frame_evidence;
 mod hypotheses;
+mod pane_edge;
 mod past_extent;
 mod past_pane;
 
 pub use self::beam_hits::{BeamHit, BeamHits};
 use self::frame_evidence::{returns_along, NormalPointIndex};
 pub(crate) use self::hypotheses::{two_hypotheses, Verdict};
+pub(crate) use self::pane_edge::near_pane_edge;
+use self::pane_edge::real_by_space;
 use self::past_extent::{past_seen_extent, through_glass};
 use self::past_pane::past_second_pane;
 use super::boundary::{beam_crossing, BeamPlanes};
@@ -230,32 +233,6 @@ impl Default for DecisionParams {
 /// ([`DecisionParams::support_excludes_own_surface`]).
 fn supports_itself(params: &DecisionParams, p: &Point3<f64>, mirrored: &Point3<f64>) -> bool {
     params.support_excludes_own_surface && (mirrored - p).norm() <= params.support_radius
-}
-
-/// Whether the beam towards `p`, crossing `bp` at range `t`, crossed it
-/// within `margin` of its extent's edge ([`DecisionParams::pane_edge_margin`];
-/// never with `margin` 0).
-pub(crate) fn near_pane_edge(bp: &BoundedPlane, p: &Point3<f64>, t: f64, margin: f64) -> bool {
-    margin > 0.0 && !bp.bounds(&Point3::from(p.coords * (t / p.coords.norm())), -margin)
-}
-
-/// The rule by which the space seen directly says behind-plane point `p`
-/// is real where it was measured: its mirror image refuted
-/// ([`two_hypotheses`]), or a surface seen there (the seen-surface test).
-/// `None` without that evidence.
-fn real_by_space(
-    space: Option<&SensorFrameSpace<'_>>,
-    support: Option<&dyn SurfaceSupport>,
-    bp: &BoundedPlane,
-    p: &Point3<f64>,
-    params: &DecisionParams,
-) -> Option<Rule> {
-    let space = space.filter(|_| params.space_test)?;
-    if two_hypotheses(space, support, &bp.plane, p, params) == Verdict::Real {
-        return Some(Rule::MirrorRefuted);
-    }
-    (params.seen_surface_test && space.occupancy(p) == Occupancy::Occupied)
-        .then_some(Rule::SeenSurface)
 }
 
 /// Answers "is there an observed surface near this point" (sensor frame),
