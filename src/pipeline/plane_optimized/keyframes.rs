@@ -414,7 +414,8 @@ impl<'a> FrameViews<'a> {
             .enumerate()
             .map(|(j, t)| {
                 let split = EchoSplit::fit(&t.all, &t.anchors, &p.echo_split, exponent);
-                let mirror = is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
+                let mirror =
+                    split.is_none() && is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
                 tracing::debug!(
                     plane = j,
                     behind = t.all.total(),
