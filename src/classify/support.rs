@@ -10,6 +10,12 @@
 //! 8 buckets; building it is two linear passes (no tree to balance), which
 //! matters because it is rebuilt for every run over all frames. The buckets
 //! are ranges of one flat array (a counting sort), not a vector each.
+//!
+//! A reflected beam ends on the first surface it meets, so an image behind
+//! a seen surface is no reflection of it: with the behind test, each kept
+//! point remembers where it was seen from, and an image with no kept point
+//! within the behind distance is supported only if it does not lie behind
+//! the surface at its nearest kept point.
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
@@ -79,6 +85,7 @@ pub struct SupportBuilder {
     buckets: FxHashMap<u64, u32>,
     /// The kept points with their bucket numbers and view directions.
     kept: Vec<(u32, [f32; 3], [i8; 3])>,
+    /// See [`SupportBuilder::with_behind`] (infinite: no such test).
     behind: f64,
     /// Points per bucket.
     counts: Vec<u32>,
