@@ -55,8 +55,9 @@ const NORMAL_REACH: f64 = 0.15;
 /// Fewer kept points than this near a surface point give no normal.
 const MIN_NORMAL_POINTS: usize = 6;
 
-/// A surface is flat where its least spread is at most this share of the
-/// next (a thin edge or a corner is not).
+/// A surface is a plane where its least spread is at most this share of
+/// the middle one (a corner is not) and the middle one at least this share
+/// of the largest (a thin edge, a line of points, is not).
 const MAX_FLATNESS: f64 = 0.1;
 
 /// Squared distance of two points.
@@ -228,14 +229,27 @@ impl WorldSupport {
     }
 
     /// Whether `p` lies more than `behind` metres behind the surface at kept
-    /// point `i`: along that surface's normal (the least spread of the kept
-    /// points within [`NORMAL_REACH`]) turned towards where `i` was seen
-    /// from. `false` where the points there make no plane.
+    /// point `i`: along that surface's normal ([`Self::normal_at`]) turned
+    /// towards where `i` was seen from. `false` where the points there make
+    /// no plane.
     fn behind_surface_at(&self, p: &Point3<f64>, i: usize) -> bool {
-        let s = self.points[i].map(f64::from);
-        let s = Point3::new(s[0], s[1], s[2]);
+        let Some(normal) = self.normal_at(i) else {
+            return false;
+        };
+        let s = Point3::from(Vector3::from(self.points[i].map(f64::from)));
+        let view = Vector3::from(self.views[i].map(f64::from));
+        let depth = normal.dot(&(p - s)) * normal.dot(&view).signum();
+        depth < -self.behind
+    }
+
+    /// The unit normal of the surface at kept point `i`: the direction of
+    /// least spread of the kept points within [`NORMAL_REACH`], where they
+    /// make a plane (at least [`MIN_NORMAL_POINTS`], flatter than
+    /// [`MAX_FLATNESS`]); its sign is arbitrary.
+    fn normal_at(&self, i: usize) -> Option<Vector3<f64>> {
+        let s = Point3::from(Vector3::from(self.points[i].map(f64::from)));
         let reach2 = (NORMAL_REACH * NORMAL_REACH) as f32;
-        let centre = [s.x as f32, s.y as f32, s.z as f32];
+        let centre = self.points[i];
         let (mut n, mut sum, mut outer) = (0usize, Vector3::zeros(), Matrix3::zeros());
         self.any_in_ball(&s, NORMAL_REACH, |_, point| {
             if dist2(point, &centre) <= reach2 {
@@ -247,19 +261,37 @@ impl WorldSupport {
             false
         });
         if n < MIN_NORMAL_POINTS {
-            return false;
+            return None;
         }
         let mean = sum / n as f64;
         let spread = (outer / n as f64 - mean * mean.transpose()).symmetric_eigen();
         let mut order = [0usize, 1, 2];
         order.sort_by(|&a, &b| spread.eigenvalues[a].total_cmp(&spread.eigenvalues[b]));
-        if spread.eigenvalues[order[0]] > MAX_FLATNESS * spread.eigenvalues[order[1]] {
-            return false;
+        let [least, middle, most] = order.map(|k| spread.eigenvalues[k]);
+        // Flat, and spread in two directions (a line of points, a thin
+        // edge, has no normal).
+        if least > MAX_FLATNESS * middle || middle < MAX_FLATNESS * most {
+            return None;
         }
-        let normal = spread.eigenvectors.column(order[0]).into_owned();
-        let view = Vector3::from(self.views[i].map(f64::from));
-        let depth = normal.dot(&(p - s)) * normal.dot(&view).signum();
-        depth < -self.behind
+        Some(spread.eigenvectors.column(order[0]).into_owned())
+    }
+
+    /// The normal ([`Self::normal_at`]) of the surface at the kept point
+    /// nearest to `p` within `radius` (world frame; clamped to the radius
+    /// the support was built for).
+    pub fn normal_near_world(&self, p: &Point3<f64>, radius: f64) -> Option<Vector3<f64>> {
+        let r = radius.min(self.radius);
+        let q = [p.x as f32, p.y as f32, p.z as f32];
+        let r2 = (r * r) as f32;
+        let mut nearest: Option<(f32, usize)> = None;
+        self.any_in_ball(p, r, |i, point| {
+            let d2 = dist2(point, &q);
+            if d2 <= r2 && nearest.is_none_or(|(n, _)| d2 < n) {
+                nearest = Some((d2, i));
+            }
+            false
+        });
+        nearest.and_then(|(_, i)| self.normal_at(i))
     }
 
     /// Call `f` on every kept point (index and position) in the cubes that
@@ -319,6 +351,12 @@ pub struct SensorFrameSupport<'a> {
 impl SurfaceSupport for SensorFrameSupport<'_> {
     fn near(&self, p: &Point3<f64>, radius: f64) -> bool {
         self.world.near_world(&(self.pose * p), radius)
+    }
+
+    fn normal_near(&self, p: &Point3<f64>, radius: f64) -> Option<Vector3<f64>> {
+        self.world
+            .normal_near_world(&(self.pose * p), radius)
+            .map(|n| self.pose.rotation.inverse() * n)
     }
 }
 
@@ -385,6 +423,40 @@ mod tests {
             assert!(on.near_world(&supported, 0.316), "{supported}");
             assert!(off.near_world(&supported, 0.316), "{supported}");
         }
+    }
+
+    /// The surface normal near a point: a wall's normal (either sign) where
+    /// its points make a plane, turned into a sensor frame with the pose's
+    /// rotation; none beyond the radius or at a lone line of points.
+    #[test]
+    fn the_normal_near_an_image_is_its_surfaces_turned_into_the_sensor_frame() {
+        let wall: Vec<Point3<f64>> = (-25..=25)
+            .flat_map(|i| {
+                (-25..=25).map(move |k| Point3::new(0.0, i as f64 * 0.04, k as f64 * 0.04))
+            })
+            .collect();
+        let line: Vec<Point3<f64>> = (0..40)
+            .map(|i| Point3::new(5.0, i as f64 * 0.04, 0.0))
+            .collect();
+        let support = WorldSupport::build(wall.into_iter().chain(line), 0.01, 0.316);
+        let n = support
+            .normal_near_world(&Point3::new(0.1, 0.2, 0.3), 0.316)
+            .expect("a plane there");
+        assert!(n.x.abs() > 0.999, "{n}");
+        assert!(support
+            .normal_near_world(&Point3::new(0.5, 0.2, 0.3), 0.316)
+            .is_none());
+        assert!(support
+            .normal_near_world(&Point3::new(5.0, 0.6, 0.0), 0.316)
+            .is_none());
+        let pose = Isometry3::new(Vector3::new(1.0, -2.0, 0.5), Vector3::new(0.0, 0.0, 0.7));
+        let in_sensor = pose.inverse() * Point3::new(0.1, 0.2, 0.3);
+        let turned = support
+            .in_sensor_frame(pose)
+            .normal_near(&in_sensor, 0.316)
+            .expect("a plane there");
+        let want = pose.rotation.inverse() * Vector3::x();
+        assert!(turned.dot(&want).abs() > 0.999, "{turned} against {want}");
     }
 
     /// With the behind test a supported image still has a kept point within

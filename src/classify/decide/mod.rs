@@ -41,7 +41,7 @@
 //! 3. What no evidence decides is `ambiguous` (the paper: unclassified, so
 //!    it is removed from the filtered cloud).
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
 mod beam_hits;
@@ -63,6 +63,7 @@ use super::rule::{Decisions, Rule};
 use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
+use crate::geometry::Plane;
 use crate::reflect::echo_split::EchoSplit;
 use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
@@ -191,6 +192,16 @@ pub struct DecisionParams {
     /// real (its mirror image refuted, or a surface seen there): seen past
     /// the mirror's edge, not through it.
     pub pane_edge_margin: f64,
+    /// Support from a seen surface within this many degrees of
+    /// perpendicular to the mirror plane is no evidence, deg (0: off). A
+    /// floor or ceiling that continues across the glass is its own mirror
+    /// image: a point on its far side (an obstacle) and a reflection of its
+    /// near side land at the same place, so the support test calls both
+    /// Reflections. With this on such points are left to the later rules
+    /// and otherwise unclassified, never guessed; it also leaves real floor
+    /// reflections unclassified, so it is off by default (datasets/README.md
+    /// has the trade-off).
+    pub perpendicular_support_deg: f64,
 }
 
 impl Default for DecisionParams {
@@ -224,6 +235,7 @@ impl Default for DecisionParams {
             echo_strength_past_second_pane: false,
             unseen_extent: 0.0,
             pane_edge_margin: 0.0,
+            perpendicular_support_deg: 0.0,
         }
     }
 }
@@ -240,6 +252,29 @@ fn supports_itself(params: &DecisionParams, p: &Point3<f64>, mirrored: &Point3<f
 pub trait SurfaceSupport {
     /// Whether an observed surface point lies within `radius` of `p`.
     fn near(&self, p: &Point3<f64>, radius: f64) -> bool;
+
+    /// The unit normal of the observed surface at the point nearest to `p`
+    /// within `radius`, where the points there make a plane; `None` where
+    /// they do not, or where the support keeps no such shape.
+    fn normal_near(&self, _p: &Point3<f64>, _radius: f64) -> Option<Vector3<f64>> {
+        None
+    }
+}
+
+/// Whether the surface supporting the mirror image `mirrored` is within
+/// `max_deg` degrees of perpendicular to `plane`
+/// ([`DecisionParams::perpendicular_support_deg`]).
+fn support_is_perpendicular(
+    support: Option<&dyn SurfaceSupport>,
+    plane: &Plane,
+    mirrored: &Point3<f64>,
+    radius: f64,
+    max_deg: f64,
+) -> bool {
+    max_deg > 0.0
+        && support
+            .and_then(|s| s.normal_near(mirrored, radius))
+            .is_some_and(|n| n.dot(&plane.normal).abs() < max_deg.to_radians().sin())
 }
 
 /// The per-point outcome of the beam test.
@@ -533,7 +568,16 @@ pub fn decide_with_hits(
             (classes[i], rules[i]) = (real(), Rule::SeenSurface);
             continue;
         }
-        if params.support_test && !supports_itself(params, &p, &mirrored) {
+        if params.support_test
+            && !supports_itself(params, &p, &mirrored)
+            && !support_is_perpendicular(
+                support,
+                &bp.plane,
+                &mirrored,
+                params.support_radius,
+                params.perpendicular_support_deg,
+            )
+        {
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
             if on_beam || nearby {

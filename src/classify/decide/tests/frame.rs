@@ -153,6 +153,64 @@ fn a_mirror_image_beside_the_point_itself_is_no_support() {
     );
 }
 
+/// A horizontal surface (a shelf, a floor) continuing across the pane is
+/// its own mirror image: a point on its far side and the reflection of
+/// its near side land at the same place. The sequence saw the shelf in
+/// front of the pane (z = -0.8, x = 2..4) and a wall facing the pane
+/// (x = 2). With `perpendicular_support_deg` the shelf is no evidence and
+/// the point on its continuation stays undecided; without it the support
+/// calls it a Reflection. The wall supports its image either way.
+#[test]
+fn support_from_a_surface_perpendicular_to_the_pane_is_no_evidence() {
+    let planes = pane();
+    let mut seen = Vec::new();
+    for i in 0..=40 {
+        for j in 0..=28 {
+            let (u, v) = (f64::from(i) * 0.05, f64::from(j) * 0.05);
+            seen.push(Point3::new(2.0 + u, -0.5 + v, -0.8));
+            seen.push(Point3::new(2.0, -0.5 + v, 0.0 + 0.015 * f64::from(i)));
+        }
+    }
+    let world = crate::classify::support::WorldSupport::build(seen, 0.05, 0.316);
+    let view = world.in_sensor_frame(Isometry3::identity());
+    let on_shelf = Point3::new(7.0f64, 0.2, -0.8);
+    let facing_wall = Point3::new(8.0f64, 0.2, 0.3);
+    let xyz = [on_shelf, facing_wall].map(|p| [p.x as f32, p.y as f32, p.z as f32]);
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    let f = frame(&xyz, 50.0);
+    let scan = OrganizedScan::build(&f, &sensor).unwrap();
+    let beams = BeamPlanes::hulls(&planes, 0.0);
+    let support = DecisionParams {
+        support_test: true,
+        support_radius: 0.316,
+        ..rule_only(false)
+    };
+    let perpendicular = DecisionParams {
+        perpendicular_support_deg: 15.0,
+        ..support
+    };
+    let decide = |params: &DecisionParams| {
+        let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
+        let d = decide_with_hits(
+            &f,
+            &scan,
+            &sensor,
+            &planes,
+            &hits,
+            params,
+            Some(&view),
+            None,
+        );
+        [0, 1].map(|i| (d.classes[i], d.rules[i]))
+    };
+    let supported = (Class::Reflection, Rule::Support);
+    assert_eq!(decide(&support), [supported, supported]);
+    assert_eq!(
+        decide(&perpendicular),
+        [(Class::Unclassified, Rule::Undecided), supported]
+    );
+}
+
 /// The dual-return rule: where a beam's far return is an Obstacle behind
 /// the pane, its near return behind the same pane is a Reflection.
 #[test]
