@@ -276,9 +276,10 @@ impl WorldSupport {
         Some(spread.eigenvectors.column(order[0]).into_owned())
     }
 
-    /// The normal ([`Self::normal_at`]) of the surface at the kept point
+    /// The unit normal (either sign) of the surface at the kept point
     /// nearest to `p` within `radius` (world frame; clamped to the radius
-    /// the support was built for).
+    /// the support was built for): the direction of least spread of the
+    /// kept points around it, where they make a plane.
     pub fn normal_near_world(&self, p: &Point3<f64>, radius: f64) -> Option<Vector3<f64>> {
         let r = radius.min(self.radius);
         let q = [p.x as f32, p.y as f32, p.z as f32];
