@@ -168,7 +168,7 @@ fn support_from_a_surface_perpendicular_to_the_pane_is_no_evidence() {
         for j in 0..=28 {
             let (u, v) = (f64::from(i) * 0.05, f64::from(j) * 0.05);
             seen.push(Point3::new(2.0 + u, -0.5 + v, -0.8));
-            seen.push(Point3::new(2.0, -0.5 + v, 0.0 + 0.015 * f64::from(i)));
+            seen.push(Point3::new(2.0, -0.5 + v, 0.015 * f64::from(i)));
         }
     }
     let world = crate::classify::support::WorldSupport::build(seen, 0.05, 0.316);
