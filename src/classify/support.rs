@@ -392,17 +392,22 @@ mod tests {
         }
     }
 
+    /// A 2 x 2 m wall at x = 0, one point every 0.04 m.
+    fn wall_at_x0() -> Vec<Point3<f64>> {
+        (-25..=25)
+            .flat_map(|i| {
+                (-25..=25).map(move |k| Point3::new(0.0, i as f64 * 0.04, k as f64 * 0.04))
+            })
+            .collect()
+    }
+
     /// A wall at x = 0 seen from x = 3: a mirror image 0.3 m behind it is
     /// not supported with the behind test, and is without; one 0.1 m behind
     /// it, one in front of it and one beside its edge are supported either
     /// way.
     #[test]
     fn an_image_behind_a_seen_wall_is_not_supported() {
-        let wall: Vec<Point3<f64>> = (-25..=25)
-            .flat_map(|i| {
-                (-25..=25).map(move |k| Point3::new(0.0, i as f64 * 0.04, k as f64 * 0.04))
-            })
-            .collect();
+        let wall = wall_at_x0();
         let build = |behind: Option<f64>| {
             let mut b = SupportBuilder::new(0.01, 0.316);
             if let Some(behind) = behind {
@@ -431,11 +436,7 @@ mod tests {
     /// rotation; none beyond the radius or at a lone line of points.
     #[test]
     fn the_normal_near_an_image_is_its_surfaces_turned_into_the_sensor_frame() {
-        let wall: Vec<Point3<f64>> = (-25..=25)
-            .flat_map(|i| {
-                (-25..=25).map(move |k| Point3::new(0.0, i as f64 * 0.04, k as f64 * 0.04))
-            })
-            .collect();
+        let wall = wall_at_x0();
         let line: Vec<Point3<f64>> = (0..40)
             .map(|i| Point3::new(5.0, i as f64 * 0.04, 0.0))
             .collect();
