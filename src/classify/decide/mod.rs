@@ -41,12 +41,12 @@
 //! 3. What no evidence decides is `ambiguous` (the paper: unclassified, so
 //!    it is removed from the filtered cloud).
 
-use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
 mod beam_hits;
 mod frame_evidence;
 mod hypotheses;
+mod mirror_support;
 mod pane_edge;
 mod past_extent;
 mod past_pane;
@@ -54,6 +54,8 @@ mod past_pane;
 pub use self::beam_hits::{BeamHit, BeamHits};
 use self::frame_evidence::{returns_along, NormalPointIndex};
 pub(crate) use self::hypotheses::{two_hypotheses, Verdict};
+pub use self::mirror_support::SurfaceSupport;
+use self::mirror_support::{support_is_perpendicular, supports_itself};
 pub(crate) use self::pane_edge::near_pane_edge;
 use self::pane_edge::real_by_space;
 use self::past_extent::{past_seen_extent, through_glass};
@@ -63,7 +65,6 @@ use super::rule::{Decisions, Rule};
 use super::space::{Occupancy, SensorFrameSpace};
 use super::Class;
 use crate::cloud::Frame;
-use crate::geometry::Plane;
 use crate::reflect::echo_split::EchoSplit;
 use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
@@ -238,43 +239,6 @@ impl Default for DecisionParams {
             perpendicular_support_deg: 0.0,
         }
     }
-}
-
-/// Whether the mirror image `mirrored` of point `p` lies so near the point
-/// that the point's own surface would support it
-/// ([`DecisionParams::support_excludes_own_surface`]).
-fn supports_itself(params: &DecisionParams, p: &Point3<f64>, mirrored: &Point3<f64>) -> bool {
-    params.support_excludes_own_surface && (mirrored - p).norm() <= params.support_radius
-}
-
-/// Answers "is there an observed surface near this point" (sensor frame),
-/// e.g. a k-d tree of Normal points.
-pub trait SurfaceSupport {
-    /// Whether an observed surface point lies within `radius` of `p`.
-    fn near(&self, p: &Point3<f64>, radius: f64) -> bool;
-
-    /// The unit normal of the observed surface at the point nearest to `p`
-    /// within `radius`, where the points there make a plane; `None` where
-    /// they do not, or where the support keeps no such shape.
-    fn normal_near(&self, _p: &Point3<f64>, _radius: f64) -> Option<Vector3<f64>> {
-        None
-    }
-}
-
-/// Whether the surface supporting the mirror image `mirrored` is within
-/// `max_deg` degrees of perpendicular to `plane`
-/// ([`DecisionParams::perpendicular_support_deg`]).
-fn support_is_perpendicular(
-    support: Option<&dyn SurfaceSupport>,
-    plane: &Plane,
-    mirrored: &Point3<f64>,
-    radius: f64,
-    max_deg: f64,
-) -> bool {
-    max_deg > 0.0
-        && support
-            .and_then(|s| s.normal_near(mirrored, radius))
-            .is_some_and(|n| n.dot(&plane.normal).abs() < max_deg.to_radians().sin())
 }
 
 /// The per-point outcome of the beam test.

@@ -7,7 +7,8 @@ use nalgebra::Point3;
 
 use super::frame_evidence::returns_along;
 use super::hypotheses::{two_hypotheses, Verdict};
-use super::{supports_itself, DecisionParams, SurfaceSupport};
+use super::mirror_support::supports_itself;
+use super::{DecisionParams, SurfaceSupport};
 use crate::classify::rule::Rule;
 use crate::classify::space::{Occupancy, SensorFrameSpace};
 use crate::classify::Class;

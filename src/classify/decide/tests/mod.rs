@@ -5,7 +5,7 @@ use super::*;
 use crate::classify::space::SpaceMap;
 use crate::cloud::Point;
 use crate::geometry::Plane;
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 
 /// A pane at x = 5 (facing the sensor at the origin), 4 m wide and 3 m
 /// high.
