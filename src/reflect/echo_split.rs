@@ -69,7 +69,8 @@ pub struct EchoSplitParams {
     /// population of reflections, while glass returns weak reflections and
     /// strong transmitted echoes. Anchors alone fail where the scene is its
     /// own mirror image (a glass door across a corridor: no mirror image
-    /// ever lands in free space).
+    /// ever lands in free space). A landmark with a fitted split is glass
+    /// by the same reasoning.
     pub mirror_needs_one_group: bool,
     /// With fewer than `min_anchors` anchors, orient a split by physics
     /// alone when `reflection_is_weaker`: the weak group is the reflections

@@ -414,8 +414,9 @@ impl<'a> FrameViews<'a> {
             .enumerate()
             .map(|(j, t)| {
                 let split = EchoSplit::fit(&t.all, &t.anchors, &p.echo_split, exponent);
-                let mirror =
-                    split.is_none() && is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
+                // A fitted split is two groups of echoes: glass.
+                let mirror = !(p.echo_split.mirror_needs_one_group && split.is_some())
+                    && is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
                 tracing::debug!(
                     plane = j,
                     behind = t.all.total(),
