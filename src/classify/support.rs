@@ -210,22 +210,31 @@ impl WorldSupport {
     /// supported. `radius` is clamped to the radius the support was built
     /// for.
     pub fn near_world(&self, p: &Point3<f64>, radius: f64) -> bool {
+        // Within `behind` of a kept point an image is on that surface, from
+        // whichever side: the common case ends the search there.
+        let (on_surface, nearest) = self.nearest_within(p, radius, self.behind);
+        on_surface || nearest.is_some_and(|i| !self.behind_surface_at(p, i))
+    }
+
+    /// The kept point nearest to `p` within `radius` (clamped to the radius
+    /// the support was built for), searched until one lies within `stop`:
+    /// whether one did (the nearest is then not sought further), and the
+    /// nearest found.
+    fn nearest_within(&self, p: &Point3<f64>, radius: f64, stop: f64) -> (bool, Option<usize>) {
         let r = radius.min(self.radius);
         let q = [p.x as f32, p.y as f32, p.z as f32];
         let r2 = (r * r) as f32;
-        // Within `behind` of a kept point an image is on that surface, from
-        // whichever side: the common case ends the search there.
-        let on = self.behind.min(r);
-        let on2 = (on * on) as f32;
+        let stop = stop.min(r);
+        let stop2 = (stop * stop) as f32;
         let mut nearest: Option<(f32, usize)> = None;
-        let on_surface = self.any_in_ball(p, r, |i, point| {
+        let stopped = self.any_in_ball(p, r, |i, point| {
             let d2 = dist2(point, &q);
             if d2 <= r2 && nearest.is_none_or(|(n, _)| d2 < n) {
                 nearest = Some((d2, i));
             }
-            d2 <= on2
+            d2 <= stop2
         });
-        on_surface || nearest.is_some_and(|(_, i)| !self.behind_surface_at(p, i))
+        (stopped, nearest.map(|(_, i)| i))
     }
 
     /// Whether `p` lies more than `behind` metres behind the surface at kept
@@ -281,18 +290,9 @@ impl WorldSupport {
     /// the support was built for): the direction of least spread of the
     /// kept points around it, where they make a plane.
     pub fn normal_near_world(&self, p: &Point3<f64>, radius: f64) -> Option<Vector3<f64>> {
-        let r = radius.min(self.radius);
-        let q = [p.x as f32, p.y as f32, p.z as f32];
-        let r2 = (r * r) as f32;
-        let mut nearest: Option<(f32, usize)> = None;
-        self.any_in_ball(p, r, |i, point| {
-            let d2 = dist2(point, &q);
-            if d2 <= r2 && nearest.is_none_or(|(n, _)| d2 < n) {
-                nearest = Some((d2, i));
-            }
-            false
-        });
-        nearest.and_then(|(_, i)| self.normal_at(i))
+        // A point at distance 0 is the nearest: stopping there loses nothing.
+        let (_, nearest) = self.nearest_within(p, radius, 0.0);
+        nearest.and_then(|i| self.normal_at(i))
     }
 
     /// Call `f` on every kept point (index and position) in the cubes that
