@@ -532,19 +532,19 @@ pub fn decide_with_hits(
             (classes[i], rules[i]) = (real(), Rule::SeenSurface);
             continue;
         }
-        if params.support_test
-            && !supports_itself(params, &p, &mirrored)
-            && !support_is_perpendicular(
-                support,
-                &bp.plane,
-                &mirrored,
-                params.support_radius,
-                params.perpendicular_support_deg,
-            )
-        {
+        if params.support_test && !supports_itself(params, &p, &mirrored) {
             let nearby = params.support_radius > 0.0
                 && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
-            if on_beam || nearby {
+            // The surface's shape is asked only of a supported image.
+            if (on_beam || nearby)
+                && !support_is_perpendicular(
+                    support,
+                    &bp.plane,
+                    &mirrored,
+                    params.support_radius,
+                    params.perpendicular_support_deg,
+                )
+            {
                 (classes[i], rules[i]) = (Class::Reflection, Rule::Support);
             }
         }
