@@ -12,6 +12,7 @@ use specular::io::{self, PlyEncoding, StampedPose};
 use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::{run_plane_optimized, Sequence, StageTimings};
 use specular::sensor::SensorModel;
+use specular::sim::{LabelRule, SceneSource};
 
 fn config(name: &str) -> Config {
     let mut c = Config::resolve(name).unwrap();
@@ -235,9 +236,10 @@ fn reflections_of_a_box_are_mirrored_back_onto_the_box() {
 #[test]
 fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
     let source = DatasetSource::Simulated {
-        scene: "two-panes".into(),
+        scene: SceneSource::Named("two-panes".into()),
         frames: Some(20),
         seed: None,
+        labels: LabelRule::default(),
     };
     let seq = Sequence::from_dataset(registry::dataset(&source).unwrap());
     let obstacles = |config: &Config| {

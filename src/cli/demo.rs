@@ -18,7 +18,7 @@ use specular::pipeline::Sequence;
 use specular::sim::{self, Scene};
 
 use super::detect::{detect_into, Detected};
-use super::input::InputArgs;
+use super::input::{InputArgs, LabelsArg};
 use super::run_dir::RunDir;
 use super::visual::{write_index, VisualOptions};
 use super::{bundled_sample, load_config};
@@ -98,8 +98,10 @@ pub fn run(args: DemoArgs) -> Result<()> {
         bag: None,
         topic: None,
         scene: None,
+        family: None,
         scene_frames: None,
         seed: None,
+        labels: LabelsArg::Raycast3dref,
     };
     let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;

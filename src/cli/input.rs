@@ -10,6 +10,7 @@ use specular::config::Config;
 use specular::io;
 use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::Sequence;
+use specular::sim::{LabelRule, SceneSource};
 
 /// The frames to read: `--frames DIR`, `--bag PATH --topic NAME` or
 /// `--scene NAME`.
@@ -18,13 +19,13 @@ pub struct InputArgs {
     /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
     /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, poses
     /// from `hesai_pose.txt` unless a pose file is given).
-    #[arg(long, required_unless_present_any = ["bag", "scene"])]
+    #[arg(long, required_unless_present_any = ["bag", "scene", "family"])]
     pub frames: Option<PathBuf>,
     /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), instead of
     /// `--frames`: a rosbag2 directory (`metadata.yaml` with mcap or sqlite3
     /// storage; split files are read in order), an `.mcap` file or a `.db3`
     /// file. Frames are named by their header stamp in seconds.
-    #[arg(long, conflicts_with_all = ["frames", "scene"], requires = "topic")]
+    #[arg(long, conflicts_with_all = ["frames", "scene", "family"], requires = "topic")]
     pub bag: Option<PathBuf>,
     /// The bag's point-cloud topic.
     #[arg(long, requires = "bag", conflicts_with = "frames")]
@@ -34,14 +35,44 @@ pub struct InputArgs {
     /// TOML file. Frames are made as they are read, nothing is written;
     /// the scene's true poses (and labels) come with them, as the poses of
     /// `detect` and the ground truth of `slam`.
-    #[arg(long, conflicts_with_all = ["frames", "bag"])]
+    #[arg(long, conflicts_with_all = ["frames", "bag", "family"])]
     pub scene: Option<String>,
-    /// Frames of `--scene` (default: the scene's own count).
-    #[arg(long, requires = "scene")]
+    /// A scene family instead (`specular simulate --list-families`): the
+    /// scene drawn for `--seed` (0-999 development, from 1000000 held
+    /// out), simulated in memory like `--scene`.
+    #[arg(long, conflicts_with_all = ["frames", "bag"])]
+    pub family: Option<String>,
+    /// Frames of `--scene` or `--family` (default: the scene's own count).
+    #[arg(long)]
     pub scene_frames: Option<usize>,
-    /// Range-noise seed of `--scene` (default: the scene's own).
-    #[arg(long, requires = "scene")]
+    /// Range-noise seed of `--scene` (default: the scene's own); with
+    /// `--family`, the family's seed (default 0), which draws the scene and
+    /// its noise.
+    #[arg(long)]
     pub seed: Option<u64>,
+    /// Which truth a simulated scene's labels carry: 3DRef's ray-cast rule
+    /// (as the real data is labelled) or the echo's physical path.
+    #[arg(long, value_enum, default_value_t = LabelsArg::Raycast3dref)]
+    pub labels: LabelsArg,
+}
+
+/// The label rule of simulated frames on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LabelsArg {
+    /// 3DRef's ray-cast labelling rule (the default).
+    #[value(name = "3dref")]
+    Raycast3dref,
+    /// The physical path of each echo.
+    Physical,
+}
+
+impl From<LabelsArg> for LabelRule {
+    fn from(l: LabelsArg) -> Self {
+        match l {
+            LabelsArg::Raycast3dref => LabelRule::Raycast3dref,
+            LabelsArg::Physical => LabelRule::Physical,
+        }
+    }
 }
 
 /// A pose file and where it came from.
@@ -60,12 +91,25 @@ impl InputArgs {
             .as_deref()
             .or(self.bag.as_deref())
             .or(self.scene.as_deref().map(Path::new))
+            .or(self.family.as_deref().map(Path::new))
             .unwrap_or(Path::new(""))
     }
 
     /// Whether the input brings its own (true) poses: a simulated scene.
     pub fn has_own_poses(&self) -> bool {
-        self.scene.is_some()
+        self.simulated().is_some()
+    }
+
+    /// The simulated scene given, if any.
+    pub fn simulated(&self) -> Option<SceneSource> {
+        match (&self.scene, &self.family) {
+            (Some(scene), _) => Some(SceneSource::Named(scene.clone())),
+            (None, Some(family)) => Some(SceneSource::Family {
+                family: family.clone(),
+                seed: self.seed.unwrap_or(0),
+            }),
+            (None, None) => None,
+        }
     }
 
     /// The pose file: `given`, else a 3DRef release directory's own.
@@ -96,17 +140,28 @@ impl InputArgs {
                 path: bag.clone(),
                 topic: self.topic.clone().unwrap_or_default(),
             },
-            (None, None) => match &self.scene {
+            (None, None) => match self.simulated() {
                 Some(scene) => DatasetSource::Simulated {
-                    scene: scene.clone(),
+                    // A family's seed draws its scene and its noise.
+                    seed: if self.family.is_some() {
+                        None
+                    } else {
+                        self.seed
+                    },
+                    scene,
                     frames: self.scene_frames,
-                    seed: self.seed,
+                    labels: self.labels.into(),
                 },
-                None => bail!("give --frames DIR, --bag PATH --topic NAME or --scene NAME"),
+                None => bail!(
+                    "give --frames DIR, --bag PATH --topic NAME, --scene NAME or --family NAME"
+                ),
             },
         };
-        if self.scene.is_some() && poses.is_some() {
-            bail!("--scene brings its true poses: drop the pose file");
+        if self.simulated().is_none() && (self.scene_frames.is_some() || self.seed.is_some()) {
+            bail!("--scene-frames and --seed apply to --scene or --family only");
+        }
+        if self.simulated().is_some() && poses.is_some() {
+            bail!("--scene and --family bring their true poses: drop the pose file");
         }
         let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
             .with_frame_cache(config.input.frame_cache_mb);

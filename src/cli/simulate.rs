@@ -9,25 +9,40 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use specular::io::{self, PlyEncoding};
-use specular::sim::{self, LabelCounts, PlaneTally, Scene, Simulator, TruePlanes};
+use specular::sim::{self, family, LabelCounts, PlaneTally, Scene, Simulator, TruePlanes};
+
+use super::input::LabelsArg;
 
 /// Arguments of `simulate`.
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
     /// Scene: a TOML file or a built-in name (demo, office, corridor,
     /// mirror-room, lobby, glass-loop, two-panes).
+    #[arg(long, required_unless_present_any = ["family", "list_families"], conflicts_with = "family")]
+    pub scene: Option<String>,
+    /// A scene family instead: the scene drawn for `--seed` (0-999 the
+    /// development split, from 1000000 held out); its scene file is
+    /// written as OUT/scene.toml.
     #[arg(long)]
-    pub scene: String,
+    pub family: Option<String>,
+    /// Print the scene families, one a line, and exit.
+    #[arg(long)]
+    pub list_families: bool,
     /// Output directory: OUT/frames/<timestamp>.ply, OUT/poses.txt,
     /// OUT/planes.json. Optional with --stats (then nothing is written).
-    #[arg(long, required_unless_present = "stats")]
+    #[arg(long, required_unless_present_any = ["stats", "list_families"])]
     pub out: Option<PathBuf>,
     /// Number of frames (default: the scene's, i.e. its trajectory once).
     #[arg(long)]
     pub frames: Option<usize>,
-    /// Seed of the range noise (default: the scene's).
+    /// Seed of the range noise (default: the scene's); with `--family`,
+    /// the family's seed (default 0), which draws the scene and its noise.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Which truth the labels carry: 3DRef's ray-cast rule (as the real
+    /// data is labelled) or the echo's physical path.
+    #[arg(long, value_enum, default_value_t = LabelsArg::Raycast3dref)]
+    pub labels: LabelsArg,
     /// Write ascii PLY (as the real 3DRef files) instead of binary.
     #[arg(long)]
     pub ascii: bool,
@@ -39,11 +54,28 @@ pub struct SimulateArgs {
 
 /// Run `simulate`.
 pub fn run(args: SimulateArgs) -> Result<()> {
-    let scene = Scene::resolve(&args.scene)?;
+    if args.list_families {
+        for f in family::FAMILIES {
+            println!("{}", f.name());
+        }
+        return Ok(());
+    }
+    let (scene, scene_file, seed) = match (&args.scene, &args.family) {
+        (Some(name), _) => {
+            let scene = Scene::resolve(name)?;
+            let seed = args.seed.unwrap_or(scene.seed);
+            (scene, None, seed)
+        }
+        (None, Some(name)) => {
+            let generated = family::generate(name, args.seed.unwrap_or(0))?;
+            let seed = generated.scene.seed;
+            (generated.scene, Some(generated.toml), seed)
+        }
+        (None, None) => anyhow::bail!("give --scene NAME or --family NAME"),
+    };
     let n = args.frames.unwrap_or(scene.frames);
     sim::check_frames(n)?;
-    let seed = args.seed.unwrap_or(scene.seed);
-    let sim = Simulator::new(&scene);
+    let sim = Simulator::new(&scene).with_label_rule(args.labels.into());
     let names: Vec<String> = (0..n).map(|k| sim.stamp(k).0).collect();
     let frames_dir = args.out.as_ref().map(|o| o.join("frames"));
     if let Some(dir) = &frames_dir {
@@ -84,6 +116,10 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         let poses: Vec<_> = (0..n).map(|k| sim.pose(k)).collect();
         io::write_tum(&out.join("poses.txt"), &poses)?;
         io::write_planes(&out.join("planes.json"), &records)?;
+        if let Some(text) = &scene_file {
+            let path = out.join("scene.toml");
+            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        }
     }
     println!(
         "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",

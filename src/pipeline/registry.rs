@@ -12,7 +12,7 @@ use crate::map::{MapMerger, MergerName, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
 use crate::registration::{AcceptAll, GroundTripleRansac, MismatchRejector, RejectorName};
 use crate::sensor::SensorModel;
-use crate::sim::{Scene, SimDataset};
+use crate::sim::{LabelRule, SceneSource, SimDataset};
 use crate::Result;
 
 /// The kinds of [`Dataset`] chosen by name on the command line (a new
@@ -31,12 +31,14 @@ pub enum DatasetSource {
     },
     /// A simulated scene, made frame by frame ([`SimDataset`]).
     Simulated {
-        /// Built-in scene name or TOML file.
-        scene: String,
+        /// Built-in scene, scene file or family and seed.
+        scene: SceneSource,
         /// Number of frames (default: the scene's).
         frames: Option<usize>,
         /// Range-noise seed (default: the scene's).
         seed: Option<u64>,
+        /// Which truth the labels carry (default: 3DRef's ray-cast rule).
+        labels: LabelRule,
     },
 }
 
@@ -50,7 +52,8 @@ pub fn dataset(source: &DatasetSource) -> Result<Arc<dyn Dataset>> {
             scene,
             frames,
             seed,
-        } => Arc::new(SimDataset::new(&Scene::resolve(scene)?, *frames, *seed)?),
+            labels,
+        } => Arc::new(SimDataset::new(&scene.resolve()?, *frames, *seed)?.with_label_rule(*labels)),
     })
 }
 

@@ -6,7 +6,7 @@ use std::borrow::Cow;
 
 use nalgebra::Isometry3;
 
-use super::{check_frames, Scene, Simulator};
+use super::{check_frames, LabelRule, Scene, Simulator};
 use crate::cloud::Frame;
 use crate::io::{Dataset, FrameEntry};
 use crate::sensor::SensorModel;
@@ -47,6 +47,12 @@ impl SimDataset {
             origin,
             entries,
         })
+    }
+
+    /// The same frames labelled by `rule` (default: 3DRef's ray-cast rule).
+    pub fn with_label_rule(mut self, rule: LabelRule) -> Self {
+        self.sim = self.sim.with_label_rule(rule);
+        self
     }
 }
 

@@ -23,7 +23,7 @@
 use glam::DVec3;
 
 use super::material::Material;
-use super::raycast::SceneIndex;
+use super::raycast::{Hit, SceneIndex};
 use super::surface::Surface;
 
 /// Interactions (hits) followed per beam at most, whatever their kind.
@@ -34,6 +34,8 @@ const KEEP_FRACTION: f64 = 1e-3;
 
 /// 3DRef label ids.
 pub mod label {
+    /// No label (3DRef's 0: the ray-cast rule could not place the point).
+    pub const UNLABELED: u8 = 0;
     /// Diffuse surface reached directly.
     pub const NORMAL: u8 = 1;
     /// Surface echo of glass.
@@ -142,8 +144,11 @@ impl BeamTracer {
     }
 
     /// All echoes of the beam `origin + t·dir` (unit `dir`), appended to
-    /// `out` in the order they were found (not sorted).
-    pub fn trace(&self, origin: DVec3, dir: DVec3, out: &mut Vec<Echo>) {
+    /// `out` in the order they were found (not sorted). Returns the first
+    /// surface the straight beam meets (what 3DRef's ray-cast labelling
+    /// looks at, [`super::labels`]), `None` when it meets nothing.
+    pub fn trace(&self, origin: DVec3, dir: DVec3, out: &mut Vec<Echo>) -> Option<Hit> {
+        let hit = self.index.cast(origin, dir, self.max_range, None)?;
         let start = PathState {
             length: 0.0,
             power: 1.0,
@@ -155,7 +160,8 @@ impl BeamTracer {
             reflector: NO_SURFACE,
             transmitter: NO_SURFACE,
         };
-        self.follow(origin, dir, start, out);
+        self.interact(origin, dir, start, hit, out);
+        Some(hit)
     }
 
     fn follow(&self, origin: DVec3, dir: DVec3, path: PathState, out: &mut Vec<Echo>) {
@@ -163,9 +169,13 @@ impl BeamTracer {
         if reach <= 0.0 {
             return;
         }
-        let Some(hit) = self.index.cast(origin, dir, reach, path.skip) else {
-            return;
-        };
+        if let Some(hit) = self.index.cast(origin, dir, reach, path.skip) {
+            self.interact(origin, dir, path, hit, out);
+        }
+    }
+
+    /// The echo of the surface `hit` and the rays leaving it.
+    fn interact(&self, origin: DVec3, dir: DVec3, path: PathState, hit: Hit, out: &mut Vec<Echo>) {
         let surf = &self.surfaces[hit.surface as usize];
         let m = &surf.material;
         let r = path.length + hit.t;

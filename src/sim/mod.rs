@@ -13,10 +13,12 @@
 //! | [`raycast`] | BVH ray casting over the triangulated surfaces (parry) |
 //! | [`echo`] | beam physics: surface echoes, transmitted and specular rays, labels |
 //! | [`returns`] | merging echoes, detection, first/strongest + last selection |
+//! | [`labels`] | the label of a point: 3DRef's ray-cast rule, or the echo's physical path |
 //! | [`simulator`] | one frame: every beam of the pattern, noise, points |
 //! | [`truth`] | ground-truth reflective planes (`planes.json`) |
 //! | [`stats`] | label shares of a sequence |
 //! | [`builtin`] | the scenes of `datasets/scenes/`, embedded |
+//! | [`family`] | scene families: random buildings of one kind from a seed, development and held-out splits |
 //! | [`dataset`] | the simulator as a [`Dataset`](crate::io::Dataset), frames made on demand |
 //!
 //! The physics follows the paper's "Sensor Modeling" section: at glass a
@@ -24,7 +26,9 @@
 //! transmitted ray that may hit an obstacle behind the glass, and a specular
 //! ray whose echo the sensor reports along the original beam direction at
 //! the full path length, i.e. behind the glass. Mirrors reflect almost all
-//! light. A point is labelled from the path of its echo.
+//! light. A point is labelled by 3DRef's own ray-cast rule ([`labels`]),
+//! as the real data is; the physical path of its echo stays in its
+//! [`PointTruth`].
 //!
 //! Simplifications: the whole revolution is taken at one pose (no motion
 //! distortion within a sweep), beams have no divergence (no mixed pixels at
@@ -41,6 +45,8 @@
 pub mod builtin;
 pub mod dataset;
 pub mod echo;
+pub mod family;
+pub mod labels;
 pub mod material;
 pub mod raycast;
 pub mod returns;
@@ -55,6 +61,7 @@ use rayon::prelude::*;
 
 pub use dataset::SimDataset;
 pub use echo::{label, Echo};
+pub use labels::LabelRule;
 pub use material::{Material, MaterialKind};
 pub use scene::Scene;
 pub use simulator::{frame_seed, PointTruth, SimFrame, Simulator};
@@ -67,6 +74,40 @@ use crate::{Error, Result};
 
 /// Most frames one run may ask for (about a day at 10 Hz).
 pub const MAX_FRAMES: usize = 1_000_000;
+
+/// Where a simulated scene comes from: a built-in name or a scene file, or
+/// a family drawn with a seed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SceneSource {
+    /// A built-in scene ([`builtin::names`]) or a scene TOML file.
+    Named(String),
+    /// The scene of a [`family`] for a seed.
+    Family {
+        /// The family's name ([`family::names`]).
+        family: String,
+        /// Its seed (development below 1000, held out from 1,000,000).
+        seed: u64,
+    },
+}
+
+impl SceneSource {
+    /// The scene, loaded or drawn.
+    pub fn resolve(&self) -> Result<Scene> {
+        match self {
+            SceneSource::Named(name) => Scene::resolve(name),
+            SceneSource::Family { family, seed } => Ok(family::generate(family, *seed)?.scene),
+        }
+    }
+}
+
+impl std::fmt::Display for SceneSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SceneSource::Named(name) => f.write_str(name),
+            SceneSource::Family { family, seed } => write!(f, "{family}/{seed}"),
+        }
+    }
+}
 
 /// A simulated sequence in memory.
 #[derive(Debug, Clone)]

@@ -105,6 +105,19 @@ impl Patch {
         Some(t)
     }
 
+    /// Euclidean distance from `p` to the patch (its plane inside the
+    /// edges, else the nearest edge).
+    fn distance(&self, p: DVec3) -> f64 {
+        let off = self.normal.dot(p) + self.d;
+        let q = p - self.normal * off;
+        if (0..self.n).all(|i| self.inward[i].dot(q - self.v[i]) >= 0.0) {
+            return off.abs();
+        }
+        (0..self.n)
+            .map(|i| segment_distance(p, self.v[i], self.v[(i + 1) % self.n]))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     fn area(&self) -> f64 {
         let mut s = DVec3::ZERO;
         for i in 0..self.n {
@@ -213,6 +226,36 @@ impl SceneIndex {
                 surface: self.patches[leaf as usize].surface,
             })
     }
+
+    /// The distance from `p` to the nearest surface, when it is below
+    /// `radius` metres (`None` when no surface is that close).
+    pub fn distance_within(&self, p: DVec3, radius: f64) -> Option<f64> {
+        self.bvh
+            .find_best(
+                radius,
+                |node: &BvhNode, _best| {
+                    let outside = (node.mins() - p).max(p - node.maxs()).max(DVec3::ZERO);
+                    outside.length()
+                },
+                |leaf, best| {
+                    let d = self.patches[leaf as usize].distance(p);
+                    (d < best).then_some(d)
+                },
+            )
+            .map(|(_, d)| d)
+    }
+}
+
+/// Distance from `p` to the segment `a`-`b`.
+fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let s = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + ab * s)
 }
 
 /// Whether a 4-vertex surface is a convex quadrilateral.
@@ -378,5 +421,20 @@ mod tests {
             .cast(DVec3::new(0.3, 0.2, 9.0), -DVec3::Z, 100.0, None)
             .unwrap();
         assert_eq!(h.surface, 1);
+    }
+
+    #[test]
+    fn distance_to_the_nearest_surface() {
+        let idx = SceneIndex::new(&[square(2.0, 0), square(5.0, 0)]);
+        let near = |p: DVec3, r: f64| idx.distance_within(p, r);
+        // Above the inside of a square: the distance to its plane.
+        assert!((near(DVec3::new(0.2, 0.3, 2.1), 1.0).unwrap() - 0.1).abs() < 1e-12);
+        assert!((near(DVec3::new(0.2, 0.3, 4.0), 1.5).unwrap() - 1.0).abs() < 1e-12);
+        // Beside a square: the distance to its edge.
+        let d = near(DVec3::new(1.3, 0.0, 2.4), 1.0).unwrap();
+        assert!((d - 0.5).abs() < 1e-12, "{d}");
+        // Nothing within the radius.
+        assert!(near(DVec3::new(0.0, 0.0, 3.5), 1.0).is_none());
+        assert!(near(DVec3::new(3.0, 0.0, 2.0), 1.5).is_none());
     }
 }

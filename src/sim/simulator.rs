@@ -9,6 +9,9 @@
 use glam::{DMat3, DVec3};
 
 use super::echo::{BeamTracer, Echo};
+use super::labels::{raycast_label, LabelRule};
+use super::material::MaterialKind;
+use super::raycast::Hit;
 use super::returns;
 use super::scene::Scene;
 use crate::cloud::{Frame, IntensityScale, Point};
@@ -29,6 +32,10 @@ pub struct PointTruth {
     pub via: u32,
     /// Specular reflections on the path.
     pub bounces: u8,
+    /// The label of the echo's physical path (see
+    /// [`LabelRule::Physical`]); the point's `label` follows the
+    /// simulator's [`LabelRule`].
+    pub physical: u8,
 }
 
 /// A simulated frame with its true pose and per-point truth.
@@ -60,6 +67,9 @@ pub struct Simulator {
     beams: Vec<DVec3>,
     min_signal: f64,
     period_us: u64,
+    /// Material class of every surface (for the ray-cast labels).
+    kinds: Vec<MaterialKind>,
+    labels: LabelRule,
 }
 
 impl Simulator {
@@ -88,13 +98,32 @@ impl Simulator {
             }
         }
         let period_us = (1e6 / model.rate_hz).round().max(1.0) as u64;
+        let kinds = scene
+            .surfaces
+            .iter()
+            .map(|s| scene.material_of(s).kind)
+            .collect();
         Self {
             scene: scene.clone(),
             tracer,
             beams,
             min_signal,
             period_us,
+            kinds,
+            labels: LabelRule::default(),
         }
+    }
+
+    /// The same simulator labelling its points by `rule` (default: 3DRef's
+    /// ray-cast rule).
+    pub fn with_label_rule(mut self, rule: LabelRule) -> Self {
+        self.labels = rule;
+        self
+    }
+
+    /// The rule the points' labels follow.
+    pub fn label_rule(&self) -> LabelRule {
+        self.labels
     }
 
     /// The scene.
@@ -137,11 +166,13 @@ impl Simulator {
         echoes
     }
 
+    /// The echoes of one beam into `echoes`; returns the first surface the
+    /// straight beam meets.
     #[inline]
-    fn echoes_into(&self, origin: DVec3, dir: DVec3, echoes: &mut Vec<Echo>) {
+    fn echoes_into(&self, origin: DVec3, dir: DVec3, echoes: &mut Vec<Echo>) -> Option<Hit> {
         let model = &self.scene.sensor.model;
         echoes.clear();
-        self.tracer.trace(origin, dir, echoes);
+        let first = self.tracer.trace(origin, dir, echoes);
         returns::merge(echoes, model.range_resolution);
         returns::detect(
             echoes,
@@ -149,6 +180,7 @@ impl Simulator {
             model.min_range,
             self.scene.sensor.max_range,
         );
+        first
     }
 
     /// Simulate frame `k` with the run's `seed`.
@@ -175,7 +207,11 @@ impl Simulator {
         let mut echoes = Vec::with_capacity(8);
         for (i, &dir_s) in self.beams.iter().enumerate() {
             let ring = (i % rings) as u16;
-            self.echoes_into(origin, rot * dir_s, &mut echoes);
+            if sensor.dropout > 0.0 && rng.unit() < sensor.dropout {
+                continue;
+            }
+            let dir_w = rot * dir_s;
+            let first_hit = self.echoes_into(origin, dir_w, &mut echoes);
             let (first, second) = returns::select(&echoes, model.return_mode);
             let Some(first) = first else { continue };
             let r1 = noisy(first.range, sensor.range_noise, &mut rng);
@@ -183,6 +219,16 @@ impl Simulator {
             if r1 > crop {
                 continue;
             }
+            let label_of = |e: &Echo, r: f64| match self.labels {
+                LabelRule::Physical => e.label,
+                LabelRule::Raycast3dref => raycast_label(
+                    first_hit,
+                    r,
+                    origin + dir_w * r,
+                    &self.kinds,
+                    self.tracer.index(),
+                ),
+            };
             let mut emit = |e: &Echo, r: f64, ret: u8| {
                 let p = dir_s * r;
                 points.push(Point {
@@ -190,12 +236,13 @@ impl Simulator {
                     intensity: (e.signal * sensor.intensity_gain).min(255.0).round() as f32,
                     ring,
                     ret,
-                    label: e.label,
+                    label: label_of(e, r),
                 });
                 truth.push(PointTruth {
                     surface: e.surface,
                     via: e.via,
                     bounces: e.bounces,
+                    physical: e.label,
                 });
             };
             emit(&first, r1, 1);

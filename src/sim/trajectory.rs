@@ -5,7 +5,8 @@
 //! Time `t` maps to arc length `s = speed · t`. A closed path (`loop`) wraps
 //! around; an open path is driven back and forth (the sensor turns around at
 //! the ends), so any number of frames is defined. Poses are
-//! `T_world_sensor` with the sensor upright (yaw only).
+//! `T_world_sensor`: the heading's yaw, then a fixed mounting tilt (roll
+//! and pitch, zero by default: the sensor upright).
 
 use glam::DVec3;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -23,6 +24,9 @@ pub struct Trajectory {
     speed: f64,
     closed: bool,
     smoothing: f64,
+    /// Fixed mounting rotation (roll about x, then pitch about y), applied
+    /// in the sensor frame after the heading.
+    tilt: UnitQuaternion<f64>,
 }
 
 impl Trajectory {
@@ -77,6 +81,7 @@ impl Trajectory {
             speed,
             closed,
             smoothing,
+            tilt: UnitQuaternion::identity(),
         })
     }
 
@@ -219,6 +224,17 @@ impl Trajectory {
         sum.y.atan2(sum.x)
     }
 
+    /// The same trajectory with the sensor mounted tilted by `[roll,
+    /// pitch]` degrees (about its x then y axis; each within ±30).
+    pub fn with_tilt_deg(mut self, tilt: [f64; 2]) -> Result<Self, String> {
+        if !tilt.iter().all(|a| a.is_finite() && a.abs() <= 30.0) {
+            return Err(format!("tilt_deg must be within ±30 degrees, got {tilt:?}"));
+        }
+        let [roll, pitch] = tilt.map(f64::to_radians);
+        self.tilt = UnitQuaternion::from_euler_angles(roll, pitch, 0.0);
+        Ok(self)
+    }
+
     /// `T_world_sensor` at time `t` seconds.
     pub fn pose(&self, t: f64) -> Isometry3<f64> {
         let s = self.speed * t;
@@ -226,7 +242,7 @@ impl Trajectory {
         let yaw = self.heading(s);
         Isometry3::from_parts(
             Translation3::new(p.x, p.y, p.z),
-            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * self.tilt,
         )
     }
 }

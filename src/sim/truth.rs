@@ -92,16 +92,17 @@ impl TruePlanes {
         Self { groups, group_of }
     }
 
-    /// The groups whose surface echo appears in a frame (sorted, unique).
+    /// The groups whose surface echo appears in a frame (sorted, unique),
+    /// by the physical truth of its points.
     pub fn observed_in(&self, frame: &SimFrame) -> Vec<usize> {
         let mut seen: Vec<usize> = frame
             .frame
             .points
             .iter()
             .zip(&frame.truth)
-            .filter(|(p, _)| {
+            .filter(|(_, t)| {
                 matches!(
-                    p.label,
+                    t.physical,
                     label::GLASS | label::MIRROR | label::OTHER_REFLECTIVE
                 )
             })

@@ -268,6 +268,7 @@ impl SceneFile {
         let t = &self.trajectory;
         let waypoints: Vec<DVec3> = t.waypoints.iter().map(|w| DVec3::from_array(*w)).collect();
         let trajectory = Trajectory::new(waypoints, t.speed, t.closed, t.heading_smoothing)
+            .and_then(|tr| tr.with_tilt_deg(t.tilt_deg.unwrap_or([0.0, 0.0])))
             .map_err(|m| format!("trajectory: {m}"))?;
         let frames = match t.frames {
             Some(0) => return Err("trajectory: frames must be at least 1".into()),
@@ -441,7 +442,12 @@ impl SensorFile {
                 return bad("blind_sector_deg must be two finite angles".into());
             }
         }
+        let dropout = self.dropout.unwrap_or(0.0);
+        if !(0.0..=0.5).contains(&dropout) {
+            return bad(format!("dropout must be in 0..0.5, got {dropout}"));
+        }
         Ok(SensorSetup {
+            dropout,
             blind_sector_deg: self.blind_sector_deg,
             model,
             range_noise: self.range_noise,

@@ -4,7 +4,15 @@
 
 use std::collections::BTreeMap;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
+
+/// Whether a list or map is empty (not written when serialising).
+fn is_empty<T>(v: &T) -> bool
+where
+    for<'a> &'a T: IntoIterator,
+{
+    v.into_iter().next().is_none()
+}
 
 fn default_noise() -> f64 {
     0.01
@@ -22,67 +30,76 @@ fn default_smoothing() -> f64 {
     1.0
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct SceneFile {
-    pub(super) name: Option<String>,
+pub(crate) struct SceneFile {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) name: Option<String>,
     #[serde(default)]
-    pub(super) description: String,
+    pub(crate) description: String,
     #[serde(default)]
-    pub(super) seed: u64,
-    pub(super) sensor: SensorFile,
-    pub(super) trajectory: TrajectoryFile,
-    #[serde(default)]
-    pub(super) materials: BTreeMap<String, MaterialFile>,
-    #[serde(default)]
-    pub(super) rooms: Vec<RoomFile>,
-    #[serde(default)]
-    pub(super) boxes: Vec<BoxFile>,
-    #[serde(default)]
-    pub(super) walls: Vec<WallFile>,
-    #[serde(default)]
-    pub(super) polygons: Vec<PolygonFile>,
-    #[serde(default)]
-    pub(super) floors: Vec<RectFile>,
-    #[serde(default)]
-    pub(super) ceilings: Vec<RectFile>,
+    pub(crate) seed: u64,
+    pub(crate) sensor: SensorFile,
+    pub(crate) trajectory: TrajectoryFile,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) materials: BTreeMap<String, MaterialFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) rooms: Vec<RoomFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) boxes: Vec<BoxFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) walls: Vec<WallFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) polygons: Vec<PolygonFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) floors: Vec<RectFile>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) ceilings: Vec<RectFile>,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct SensorFile {
-    pub(super) model: String,
+pub(crate) struct SensorFile {
+    pub(crate) model: String,
     #[serde(default = "default_noise")]
-    pub(super) range_noise: f64,
-    pub(super) max_range: Option<f64>,
-    pub(super) crop_range: Option<f64>,
+    pub(crate) range_noise: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) max_range: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) crop_range: Option<f64>,
     #[serde(default = "default_bounces")]
-    pub(super) max_bounces: u32,
+    pub(crate) max_bounces: u32,
     #[serde(default = "default_gain")]
-    pub(super) intensity_gain: f64,
+    pub(crate) intensity_gain: f64,
     #[serde(default = "default_threshold")]
-    pub(super) detection_threshold: f64,
-    pub(super) blind_sector_deg: Option<[f64; 2]>,
+    pub(crate) detection_threshold: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) blind_sector_deg: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) dropout: Option<f64>,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct TrajectoryFile {
-    pub(super) waypoints: Vec<[f64; 3]>,
-    pub(super) speed: f64,
+pub(crate) struct TrajectoryFile {
+    pub(crate) waypoints: Vec<[f64; 3]>,
+    pub(crate) speed: f64,
     #[serde(rename = "loop", default)]
-    pub(super) closed: bool,
+    pub(crate) closed: bool,
     #[serde(default = "default_smoothing")]
-    pub(super) heading_smoothing: f64,
-    pub(super) frames: Option<usize>,
+    pub(crate) heading_smoothing: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) frames: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) tilt_deg: Option<[f64; 2]>,
 }
 
 /// Material parameters as written in scene files (see
 /// [`crate::sim::material`] for their meaning); omitted parameters take
 /// physically plausible defaults for the class.
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-pub(super) enum MaterialFile {
+pub(crate) enum MaterialFile {
     Diffuse {
         reflectivity: f64,
     },
@@ -164,59 +181,61 @@ fn five() -> f64 {
     5.0
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct RoomFile {
-    pub(super) min: [f64; 3],
-    pub(super) max: [f64; 3],
+pub(crate) struct RoomFile {
+    pub(crate) min: [f64; 3],
+    pub(crate) max: [f64; 3],
     #[serde(default)]
-    pub(super) yaw_deg: f64,
-    pub(super) material: String,
-    pub(super) floor: Option<String>,
-    pub(super) ceiling: Option<String>,
-    #[serde(default)]
-    pub(super) omit: Vec<String>,
-    #[serde(default)]
-    pub(super) sides: BTreeMap<String, String>,
+    pub(crate) yaw_deg: f64,
+    pub(crate) material: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) floor: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) ceiling: Option<String>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) omit: Vec<String>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) sides: BTreeMap<String, String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct BoxFile {
-    pub(super) min: [f64; 3],
-    pub(super) max: [f64; 3],
+pub(crate) struct BoxFile {
+    pub(crate) min: [f64; 3],
+    pub(crate) max: [f64; 3],
     #[serde(default)]
-    pub(super) yaw_deg: f64,
-    pub(super) material: String,
-    #[serde(default)]
-    pub(super) omit: Vec<String>,
-    #[serde(default)]
-    pub(super) sides: BTreeMap<String, String>,
+    pub(crate) yaw_deg: f64,
+    pub(crate) material: String,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) omit: Vec<String>,
+    #[serde(default, skip_serializing_if = "is_empty")]
+    pub(crate) sides: BTreeMap<String, String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct WallFile {
-    pub(super) from: [f64; 2],
-    pub(super) to: [f64; 2],
+pub(crate) struct WallFile {
+    pub(crate) from: [f64; 2],
+    pub(crate) to: [f64; 2],
     #[serde(default)]
-    pub(super) base: f64,
-    pub(super) height: f64,
-    pub(super) material: String,
+    pub(crate) base: f64,
+    pub(crate) height: f64,
+    pub(crate) material: String,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct PolygonFile {
-    pub(super) vertices: Vec<[f64; 3]>,
-    pub(super) material: String,
+pub(crate) struct PolygonFile {
+    pub(crate) vertices: Vec<[f64; 3]>,
+    pub(crate) material: String,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub(super) struct RectFile {
-    pub(super) min: [f64; 2],
-    pub(super) max: [f64; 2],
-    pub(super) z: f64,
-    pub(super) material: String,
+pub(crate) struct RectFile {
+    pub(crate) min: [f64; 2],
+    pub(crate) max: [f64; 2],
+    pub(crate) z: f64,
+    pub(crate) material: String,
 }

@@ -10,11 +10,13 @@
 //! range_noise = 0.01         # Gaussian range noise sigma, metres
 //! crop_range = 25.0          # drop returns farther than this (3DRef: 25 m); optional
 //! blind_sector_deg = [157.5, 202.5]  # azimuths hidden by the operator; optional
+//! dropout = 0.01             # share of beams that return nothing; optional
 //!
 //! [trajectory]
 //! waypoints = [[1.0, 1.0, 1.2], [8.0, 1.0, 1.2]]
 //! speed = 0.5                # m/s; frames at the sensor rate (10 Hz)
 //! loop = false
+//! tilt_deg = [1.0, -2.0]     # fixed mounting roll and pitch; optional
 //!
 //! [materials]
 //! plaster = { type = "diffuse", reflectivity = 0.7 }
@@ -47,7 +49,7 @@
 //! into surfaces with resolved materials.
 
 mod build;
-mod file;
+pub(crate) mod file;
 
 use std::path::{Path, PathBuf};
 
@@ -81,6 +83,9 @@ pub struct SensorSetup {
     /// operator: beams there return nothing, as in 3DRef where the person
     /// pushing the trolley was removed.
     pub blind_sector_deg: Option<[f64; 2]>,
+    /// Probability that a beam returns nothing at all (dust, absorbing or
+    /// wet spots, electronics), drawn per beam from the frame's seed.
+    pub dropout: f64,
 }
 
 impl SensorSetup {
@@ -157,6 +162,12 @@ impl Scene {
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
         let file: file::SceneFile =
             toml::from_str(text).map_err(|e| Error::format(origin, e.to_string().trim_end()))?;
+        Self::from_file(file, origin)
+    }
+
+    /// Validate and build a scene from its file tables (a generated scene:
+    /// [`super::family`]).
+    pub(crate) fn from_file(file: file::SceneFile, origin: &Path) -> Result<Self> {
         file.build(origin)
             .map_err(|m| Error::format(origin, m.to_string()))
     }
