@@ -1,6 +1,7 @@
 //! Command-line parsing and the subcommands. A thin layer: it checks the
 //! arguments, loads inputs through the library and writes outputs.
 
+mod bench;
 mod convert;
 mod demo;
 mod detect;
@@ -53,6 +54,8 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Pose-plane factor graphs: export synthetic ones, solve graph files.
     Graph(graph::GraphArgs),
+    /// Benchmarks: the held-out scene families.
+    Bench(bench::BenchArgs),
     /// Print the effective configuration as TOML (every key with its value;
     /// for a file, first a comment naming the built-in it layers over and
     /// the keys it sets).
@@ -100,6 +103,7 @@ pub fn run() -> Result<()> {
         Command::Convert(args) => convert::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Graph(args) => graph::run(args),
+        Command::Bench(args) => bench::run(args),
         Command::Config { config } => {
             if Config::builtin_names().contains(&config.as_str()) {
                 print!("{}", Config::resolve(&config)?.to_toml());
