@@ -33,7 +33,7 @@ pub use summary::{FamilySummary, Stat, Summary, METRICS};
 /// Frames per sequence of the full benchmark: 20 s at 10 Hz.
 pub const DEFAULT_FRAMES: usize = 200;
 /// Seeds per family of the full benchmark.
-pub const DEFAULT_SEEDS: usize = 6;
+pub const DEFAULT_SEEDS: usize = 10;
 
 /// What one benchmark run covers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
