@@ -272,17 +272,19 @@ fn range_to_an_object_behind_glass_equals_the_range_without_glass() {
 
 #[test]
 fn labels_match_the_path_of_the_echo() {
+    // The physical truth of every point, and its 3DRef label beside it.
     let scene = lab(0.0);
     let run = simulate(&scene, Some(4), None).unwrap();
     let res = scene.sensor.model.range_resolution;
     let mut seen = [0usize; 7];
     for k in 0..run.frames.len() {
         for (p, t) in run.frames[k].points.iter().zip(&run.truth[k]) {
-            seen[p.label as usize] += 1;
+            seen[t.physical as usize] += 1;
+            check_3dref_label(&scene, p.label, t);
             let x = world(&run, k, p);
             let hit = kind(&scene, t.surface);
             let direct = t.via == specular::sim::echo::NO_SURFACE;
-            match p.label {
+            match t.physical {
                 label::NORMAL => {
                     assert!(direct && hit == MaterialKind::Diffuse);
                     // Reached straight: the point is on its surface.
@@ -290,7 +292,7 @@ fn labels_match_the_path_of_the_echo() {
                     assert!(within_bounds(&scene, t.surface, x, 1e-3));
                 }
                 label::GLASS | label::MIRROR | label::OTHER_REFLECTIVE => {
-                    let want = match p.label {
+                    let want = match t.physical {
                         label::GLASS => MaterialKind::Glass,
                         label::MIRROR => MaterialKind::Mirror,
                         _ => MaterialKind::OtherReflective,
@@ -320,6 +322,32 @@ fn labels_match_the_path_of_the_echo() {
     for l in 1..=6 {
         assert!(seen[l] > 0, "label {l} never produced: {seen:?}");
     }
+}
+
+/// 3DRef's ray-cast label against the physical truth of a point: the
+/// same on opaque surfaces and reflective surfaces; behind a mirror a
+/// Reflection; behind glass a Reflection or an Obstacle (the rule asks
+/// whether a surface is there, not which echo was stronger). A point that
+/// lies within 0.15 m of the first reflective surface on its ray (an echo
+/// merged with that surface's) takes that surface's label.
+fn check_3dref_label(scene: &specular::sim::Scene, l: u8, t: &specular::sim::PointTruth) {
+    let surface = matches!(l, label::GLASS | label::MIRROR | label::OTHER_REFLECTIVE);
+    let ok = match t.physical {
+        label::NORMAL | label::GLASS | label::MIRROR | label::OTHER_REFLECTIVE => l == t.physical,
+        label::REFLECTION => match kind(scene, t.via) {
+            MaterialKind::Glass => {
+                l == label::REFLECTION || l == label::OBSTACLE_BEHIND_GLASS || surface
+            }
+            _ => l == label::REFLECTION || surface,
+        },
+        label::OBSTACLE_BEHIND_GLASS => l == label::OBSTACLE_BEHIND_GLASS || surface,
+        _ => false,
+    };
+    assert!(
+        ok,
+        "3DRef label {l} for a point of physical label {}",
+        t.physical
+    );
 }
 
 #[test]

@@ -161,7 +161,12 @@ impl InputArgs {
             bail!("--scene-frames and --seed apply to --scene or --family only");
         }
         if self.simulated().is_some() && poses.is_some() {
-            bail!("--scene and --family bring their true poses: drop the pose file");
+            let flag = if self.scene.is_some() {
+                "--scene"
+            } else {
+                "--family"
+            };
+            bail!("{flag} brings its true poses: drop the pose file");
         }
         let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
             .with_frame_cache(config.input.frame_cache_mb);

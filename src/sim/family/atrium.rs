@@ -120,8 +120,13 @@ impl SceneFamily for Atrium {
         let n = (w * depth / 15.0) as usize;
         d.clutter(DVec2::splat(0.1), DVec2::new(w - 0.1, depth - 0.1), 0.0, n);
         if ground_is_level(d) {
-            let v1 = d.int(1, 5);
-            d.clutter(DVec2::new(-3.0, -6.0), DVec2::new(w + 3.0, -0.3), 0.0, v1);
+            let count = d.int(1, 5);
+            d.clutter(
+                DVec2::new(-3.0, -6.0),
+                DVec2::new(w + 3.0, -0.3),
+                0.0,
+                count,
+            );
         }
         Ok(())
     }

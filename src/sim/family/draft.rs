@@ -24,6 +24,8 @@ pub const PATH_CLEARANCE: f64 = 0.6;
 /// A reflective panel is hung this far in front of the wall that carries
 /// it, metres (so that the two never share a plane).
 const PANEL_OFFSET: f64 = 0.02;
+/// How far apart the way out and the way back of a walk are, metres.
+const TURN_WIDTH: f64 = 0.5;
 /// The 3DRef crop range every family keeps, metres.
 const CROP_RANGE: f64 = 25.0;
 
@@ -404,12 +406,10 @@ impl Draft {
         })
     }
 
-    /// Points along the path every 0.1 m.
+    /// Points along the (closed) path every 0.1 m.
     fn path_samples(&self) -> impl Iterator<Item = DVec2> + '_ {
-        let closed = self.file.trajectory.closed;
         let n = self.path.len();
-        let segments = if closed { n } else { n.saturating_sub(1) };
-        (0..segments).flat_map(move |i| {
+        (0..n).flat_map(move |i| {
             let a = self.path[i];
             let b = self.path[(i + 1) % n];
             let steps = (a.distance(b) / 0.1).ceil().max(1.0) as usize;
@@ -554,8 +554,17 @@ impl Draft {
 
     /// The sensor's path through floor-plan `points` at a random walking
     /// speed (0.3-1.5 m/s), height and mounting tilt: a loop when
-    /// `closed`, else walked there and back.
+    /// `closed`, else walked there and back on a narrow loop
+    /// ([`there_and_back`]), turning at each end as a walker does rather
+    /// than spinning on the spot.
     pub fn path(&mut self, points: &[DVec2], closed: bool, floor: f64) {
+        let there_back;
+        let points = if closed {
+            points
+        } else {
+            there_back = there_and_back(points, TURN_WIDTH);
+            &there_back
+        };
         let height = floor + self.uniform(0.8, 1.8);
         let speed = self.uniform(0.3, 1.5);
         let tilt = [
@@ -566,7 +575,7 @@ impl Draft {
         let t = &mut self.file.trajectory;
         t.waypoints = points.iter().map(|p| [p.x, p.y, height]).collect();
         t.speed = round3(speed);
-        t.closed = closed;
+        t.closed = true;
         t.tilt_deg = Some(tilt.map(round3));
     }
 
@@ -575,6 +584,23 @@ impl Draft {
         let pts = [min, DVec2::new(max.x, min.y), max, DVec2::new(min.x, max.y)];
         self.path(&pts, true, floor);
     }
+}
+
+/// Out on one side of the polyline `points` and back on the other, `width`
+/// apart: a closed loop whose ends are two right-angle corners `width`
+/// apart, which the trajectory's heading smoothing turns into a walker's
+/// turn (an open path reversed in place would spin the sensor by 180
+/// degrees between two frames).
+pub fn there_and_back(points: &[DVec2], width: f64) -> Vec<DVec2> {
+    let n = points.len();
+    let side = |i: usize| {
+        let (a, b) = (points[i.saturating_sub(1)], points[(i + 1).min(n - 1)]);
+        let d = (b - a).normalize_or_zero();
+        DVec2::new(-d.y, d.x) * (width / 2.0)
+    };
+    let out = (0..n).map(|i| points[i] + side(i));
+    let back = (0..n).rev().map(|i| points[i] - side(i));
+    out.chain(back).collect()
 }
 
 /// Round to a millimetre (what the scene file shows).

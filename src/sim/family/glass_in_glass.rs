@@ -112,8 +112,8 @@ impl SceneFamily for GlassInGlass {
                     d.wall(r[i], r[(i + 1) % 4], 0.0, h, &plaster);
                 }
             }
-            let v1 = d.int(1, 4);
-            d.clutter(r[0] + 0.1, r[2] - 0.1, 0.0, v1);
+            let count = d.int(1, 4);
+            d.clutter(r[0] + 0.1, r[2] - 0.1, 0.0, count);
             d.reserve((r[0] - 0.05).extend(0.0), (r[2] + 0.05).extend(h));
         }
         let n = (w * depth / 8.0) as usize;

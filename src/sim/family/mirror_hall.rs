@@ -81,28 +81,32 @@ impl SceneFamily for MirrorHall {
         );
         let inside = DVec2::new(w / 2.0, depth / 2.0);
         // Mirrors: the chamfer always; the others by chance.
-        let v1 = d.uniform(0.0, 0.4);
-        let v2 = d.uniform(1.8, 2.5).min(h - 0.1);
-        d.panel(chamfer[1], chamfer[0], 0.0, 1.0, v1, v2, inside, &mirror);
+        let base = d.uniform(0.0, 0.4);
+        let height = d.uniform(1.8, 2.5).min(h - 0.1);
+        d.panel(
+            chamfer[1], chamfer[0], 0.0, 1.0, base, height, inside, &mirror,
+        );
         if d.chance(0.5) {
             let a = d.uniform(0.05, 0.5);
             let b = a + d.uniform(0.15, 0.45);
-            let v1 = d.uniform(0.0, 0.5);
-            let v2 = d.uniform(1.5, 2.2);
-            d.panel(outline[6], outline[5], a, b, v1, v2, inside, &mirror);
+            let base = d.uniform(0.0, 0.5);
+            let height = d.uniform(1.5, 2.2);
+            d.panel(outline[6], outline[5], a, b, base, height, inside, &mirror);
         }
         if d.chance(0.4) {
             // A long mirror along the path: seen at grazing angles.
-            let v1 = d.uniform(0.0, 0.3);
-            let v2 = d.uniform(1.8, 2.4).min(h - 0.1);
-            d.panel(outline[0], outline[1], 0.1, 0.9, v1, v2, inside, &mirror);
+            let base = d.uniform(0.0, 0.3);
+            let height = d.uniform(1.8, 2.4).min(h - 0.1);
+            d.panel(
+                outline[0], outline[1], 0.1, 0.9, base, height, inside, &mirror,
+            );
         }
         if d.chance(0.5) {
             // At the far end of the side hall: seen from far.
             let m = d.mirror();
-            let v1 = d.uniform(0.0, 0.5);
-            let v2 = d.uniform(1.5, 2.3).min(h - 0.1);
-            d.panel(side[1], side[2], 0.1, 0.9, v1, v2, side[0], &m);
+            let base = d.uniform(0.0, 0.5);
+            let height = d.uniform(1.5, 2.3).min(h - 0.1);
+            d.panel(side[1], side[2], 0.1, 0.9, base, height, side[0], &m);
         }
         // Glass: a glazed section of the west wall onto a room or a street.
         if west_glass {
@@ -133,8 +137,8 @@ impl SceneFamily for MirrorHall {
                 &floor,
                 &ceiling,
             );
-            let v1 = d.int(2, 5);
-            d.clutter(corners[0] + 0.1, corners[2] - 0.1, 0.0, v1);
+            let count = d.int(2, 5);
+            d.clutter(corners[0] + 0.1, corners[2] - 0.1, 0.0, count);
         } else {
             // A glass door in the south wall onto the street.
             let glass = d.glass(GlassStyle::Clear);
@@ -190,8 +194,8 @@ impl SceneFamily for MirrorHall {
             0.0,
             n,
         );
-        let v1 = d.int(1, 5);
-        d.clutter(side[0] + 0.1, side[2] - 0.1, 0.0, v1);
+        let count = d.int(1, 5);
+        d.clutter(side[0] + 0.1, side[2] - 0.1, 0.0, count);
         Ok(())
     }
 }

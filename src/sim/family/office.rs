@@ -92,15 +92,15 @@ pub(super) fn draw_window_room(
         let mirror = d.mirror();
         let a = d.uniform(0.1, 0.6);
         let b = a + d.uniform(0.1, 0.35);
-        let v1 = d.uniform(0.0, 0.8);
-        let v2 = d.uniform(1.2, 1.9);
+        let base = d.uniform(0.0, 0.8);
+        let height = d.uniform(1.2, 1.9);
         d.panel(
             corners[3],
             corners[0],
             a,
             b,
-            v1,
-            v2,
+            base,
+            height,
             DVec2::new(w / 2.0, depth / 2.0),
             &mirror,
         );
@@ -146,8 +146,13 @@ pub(super) fn draw_window_room(
     }
     if ground == 0.0 {
         // Passers-by and street furniture close to the window.
-        let v1 = d.int(1, 4);
-        d.clutter(DVec2::new(-5.0, -6.0), DVec2::new(w + 5.0, -0.3), 0.0, v1);
+        let count = d.int(1, 4);
+        d.clutter(
+            DVec2::new(-5.0, -6.0),
+            DVec2::new(w + 5.0, -0.3),
+            0.0,
+            count,
+        );
     }
     Ok(())
 }

@@ -44,8 +44,8 @@ impl SceneFamily for Storefront {
             keep,
         );
         // The storeys above the shops.
-        let v1 = d.uniform(3.0, 10.0);
-        d.wall(DVec2::ZERO, DVec2::new(len, 0.0), h, v1, &plaster);
+        let upper = d.uniform(3.0, 10.0);
+        d.wall(DVec2::ZERO, DVec2::new(len, 0.0), h, upper, &plaster);
         for k in 0..shops {
             let (x0, x1) = (xs[k], xs[k + 1]);
             let glass = d.glass(GlassStyle::Clear);
@@ -136,8 +136,13 @@ impl SceneFamily for Storefront {
             );
         }
         // People on the pavement.
-        let v1 = d.int(1, 5);
-        d.clutter(DVec2::new(0.0, -pavement), DVec2::new(len, -0.2), 0.0, v1);
+        let count = d.int(1, 5);
+        d.clutter(
+            DVec2::new(0.0, -pavement),
+            DVec2::new(len, -0.2),
+            0.0,
+            count,
+        );
         Ok(())
     }
 }
