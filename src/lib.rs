@@ -23,7 +23,7 @@
 //! | [`slam`] | scan-to-map tracking, degeneracy handling, map update |
 //! | [`classify`] | per-point classification (`Classifier`) and mirror-back |
 //! | [`eval`] | the paper's metrics: precision, recall, IoU, removal rate |
-//! | [`bench`] | the held-out benchmark: both pipelines over seeds of every scene family |
+//! | [`bench`](mod@bench) | the held-out benchmark: both pipelines over seeds of every scene family |
 //! | [`pipeline`] | wiring: runs a method over a sequence of frames |
 //! | [`sim`] | dual-return LiDAR simulator with glass and mirrors (labelled sequences with exact truth) |
 //! | [`config`] | the TOML configuration, the single source of defaults |

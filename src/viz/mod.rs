@@ -6,7 +6,7 @@
 //! | [`mcap::write_run_mcap`] | `run.mcap`: classified clouds, planes, poses (Foxglove) |
 //! | [`topdown`] | `topdown.png`: the classified map from above, a height slice |
 //! | [`plots`] | `trajectory.png` (estimate and ground truth), `metrics.png` |
-//! | [`bench`] | `bench.png`: the benchmark's seeds per family |
+//! | [`bench`](mod@bench) | `bench.png`: the benchmark's seeds per family |
 //! | [`corner`] | the around-the-corner figure (of `specular-reproduce`) |
 //! | [`report`] | `report.md` |
 //! | [`params`] | what the outputs are made of (`[output]` in the configuration) |

@@ -23,7 +23,7 @@ use crate::sim::scene::file::{
 pub const PATH_CLEARANCE: f64 = 0.6;
 /// A reflective panel is hung this far in front of the wall that carries
 /// it, metres (so that the two never share a plane).
-const PANEL_OFFSET: f64 = 0.02;
+pub const PANEL_OFFSET: f64 = 0.02;
 /// How far apart the way out and the way back of a walk are, metres.
 const TURN_WIDTH: f64 = 0.5;
 /// The 3DRef crop range every family keeps, metres.
