@@ -4,7 +4,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::draft::{Draft, GlassStyle};
+use super::draft::{Draft, GlassStyle, Glazing};
 use super::SceneFamily;
 
 /// Lobbies and atria.
@@ -108,13 +108,15 @@ impl SceneFamily for Atrium {
                 DVec2::new(0.0, edge),
                 DVec2::new(w, edge),
                 z,
-                0.0,
-                1.1,
-                1.1,
-                posts,
-                0.08,
-                &railing,
-                &steel,
+                &Glazing {
+                    sill: 0.0,
+                    head: 1.1,
+                    top: 1.1,
+                    pane: posts,
+                    mullion: 0.08,
+                    glass: &railing,
+                    frame: &steel,
+                },
             );
         }
         let n = (w * depth / 15.0) as usize;

@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 
-use super::draft::{Draft, GlassStyle};
+use super::draft::{Draft, GlassStyle, Glazing};
 use super::SceneFamily;
 
 /// Glass-lined corridors.
@@ -39,13 +39,15 @@ impl SceneFamily for GlassCorridor {
                 end[0],
                 end[1],
                 0.0,
-                0.0,
-                2.1,
-                h,
-                width / 2.0,
-                0.08,
-                &door,
-                &frame,
+                &Glazing {
+                    sill: 0.0,
+                    head: 2.1,
+                    top: h,
+                    pane: width / 2.0,
+                    mullion: 0.08,
+                    glass: &door,
+                    frame: &frame,
+                },
             );
             let hall = d.uniform(4.0, 8.0);
             let corners = [

@@ -39,6 +39,27 @@ pub enum GlassStyle {
     Coated,
 }
 
+/// How a glazed wall is built: panes of `glass` between vertical mullions
+/// of `frame`, a sill below the panes and a head above them. Heights are
+/// above the floor the wall stands on.
+#[derive(Debug, Clone, Copy)]
+pub struct Glazing<'a> {
+    /// Top of the sill (opaque below), metres.
+    pub sill: f64,
+    /// Top of the panes (opaque above, up to `top`), metres.
+    pub head: f64,
+    /// The wall's full height, metres.
+    pub top: f64,
+    /// Pane width aimed at (the wall is split into whole panes), metres.
+    pub pane: f64,
+    /// Mullion width, metres.
+    pub mullion: f64,
+    /// Material of the panes.
+    pub glass: &'a str,
+    /// Material of sill, head and mullions.
+    pub frame: &'a str,
+}
+
 /// An axis-aligned footprint of a solid, with its height range.
 #[derive(Debug, Clone, Copy)]
 struct Solid {
@@ -288,48 +309,32 @@ impl Draft {
         );
     }
 
-    /// A glazed wall from `a` to `b` standing on height `z0`: panes of
-    /// `glass` between vertical mullions of `frame` (pane widths about
-    /// `pane` metres, mullions `mullion` wide), a sill of `frame` below
-    /// `sill` and a head above `head`; `top` is the wall's full height (all
-    /// three above `z0`). Returns the pane count.
-    #[allow(clippy::too_many_arguments)]
-    pub fn glazing(
-        &mut self,
-        a: DVec2,
-        b: DVec2,
-        z0: f64,
-        sill: f64,
-        head: f64,
-        top: f64,
-        pane: f64,
-        mullion: f64,
-        glass: &str,
-        frame: &str,
-    ) -> usize {
+    /// A glazed wall from `a` to `b` standing on height `z0`, built as
+    /// `g` says. Returns the pane count.
+    pub fn glazing(&mut self, a: DVec2, b: DVec2, z0: f64, g: &Glazing<'_>) -> usize {
         let len = a.distance(b);
         let dir = (b - a) / len;
-        let panes = ((len + mullion) / (pane + mullion)).round().max(1.0) as usize;
-        let width = (len - mullion * (panes as f64 - 1.0)) / panes as f64;
-        self.wall(a, b, z0, sill, frame);
-        self.wall(a, b, z0 + head, top - head, frame);
+        let panes = ((len + g.mullion) / (g.pane + g.mullion)).round().max(1.0) as usize;
+        let width = (len - g.mullion * (panes as f64 - 1.0)) / panes as f64;
+        let clear = g.head - g.sill;
+        self.wall(a, b, z0, g.sill, g.frame);
+        self.wall(a, b, z0 + g.head, g.top - g.head, g.frame);
         let mut s = 0.0;
         for k in 0..panes {
             let p0 = a + dir * s;
             let p1 = a + dir * (s + width);
-            self.wall(p0, p1, z0 + sill, head - sill, glass);
+            self.wall(p0, p1, z0 + g.sill, clear, g.glass);
             s += width;
             if k + 1 < panes {
-                self.wall(p1, a + dir * (s + mullion), z0 + sill, head - sill, frame);
-                s += mullion;
+                self.wall(p1, a + dir * (s + g.mullion), z0 + g.sill, clear, g.frame);
+                s += g.mullion;
             }
         }
         panes
     }
 
     /// A glazed wall with random pane widths (0.6-3 m), mullions
-    /// (0.05-0.3 m) and sill.
-    #[allow(clippy::too_many_arguments)]
+    /// (0.05-0.3 m), sill (below `max_sill`) and head, `top` high.
     pub fn random_glazing(
         &mut self,
         a: DVec2,
@@ -347,7 +352,16 @@ impl Draft {
             self.uniform(0.05, max_sill)
         };
         let head = top - self.uniform(0.0, 0.4).min(top * 0.2);
-        self.glazing(a, b, 0.0, sill, head, top, pane, mullion, glass, frame)
+        let g = Glazing {
+            sill,
+            head,
+            top,
+            pane,
+            mullion,
+            glass,
+            frame,
+        };
+        self.glazing(a, b, 0.0, &g)
     }
 
     // ------------------------------------------------------------ solids

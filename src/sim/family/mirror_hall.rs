@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-use super::draft::{Draft, GlassStyle};
+use super::draft::{Draft, GlassStyle, Glazing};
 use super::SceneFamily;
 
 /// Halls with mirrors at any angle.
@@ -147,13 +147,15 @@ impl SceneFamily for MirrorHall {
                 DVec2::new(at, 0.0),
                 DVec2::new(at + 1.8, 0.0),
                 0.0,
-                0.0,
-                2.2,
-                2.2,
-                0.9,
-                0.06,
-                &glass,
-                &frame,
+                &Glazing {
+                    sill: 0.0,
+                    head: 2.2,
+                    top: 2.2,
+                    pane: 0.9,
+                    mullion: 0.06,
+                    glass: &glass,
+                    frame: &frame,
+                },
             );
             let keep = (DVec2::ZERO, DVec2::new(w + side_len, depth));
             d.street(

@@ -33,7 +33,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-pub use draft::{there_and_back, Draft, GlassStyle, PANEL_OFFSET, PATH_CLEARANCE};
+pub use draft::{there_and_back, Draft, GlassStyle, Glazing, PANEL_OFFSET, PATH_CLEARANCE};
 
 use super::raycast::SceneIndex;
 use super::Scene;

@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 
-use super::draft::{Draft, GlassStyle};
+use super::draft::{Draft, GlassStyle, Glazing};
 use super::SceneFamily;
 
 /// Shop fronts seen from inside and outside.
@@ -52,45 +52,25 @@ impl SceneFamily for Storefront {
             // Display windows with a glass door.
             let door = d.uniform(0.9, 1.8);
             let at = x0 + d.uniform(0.5, (x1 - x0) - door - 0.5);
-            let sill = d.uniform(0.0, 0.8);
-            let pane = d.uniform(1.2, 3.0);
-            let mullion = d.uniform(0.05, 0.2);
-            d.glazing(
-                DVec2::new(x0, 0.0),
-                DVec2::new(at, 0.0),
-                0.0,
-                sill,
-                h - 0.3,
-                h,
-                pane,
-                mullion,
-                &glass,
-                &frame,
-            );
-            d.glazing(
-                DVec2::new(at, 0.0),
-                DVec2::new(at + door, 0.0),
-                0.0,
-                0.0,
-                2.2,
-                h,
-                door,
-                mullion,
-                &glass,
-                &frame,
-            );
-            d.glazing(
-                DVec2::new(at + door, 0.0),
-                DVec2::new(x1, 0.0),
-                0.0,
-                sill,
-                h - 0.3,
-                h,
-                pane,
-                mullion,
-                &glass,
-                &frame,
-            );
+            let windows = Glazing {
+                sill: d.uniform(0.0, 0.8),
+                head: h - 0.3,
+                top: h,
+                pane: d.uniform(1.2, 3.0),
+                mullion: d.uniform(0.05, 0.2),
+                glass: &glass,
+                frame: &frame,
+            };
+            let entrance = Glazing {
+                sill: 0.0,
+                head: 2.2,
+                pane: door,
+                ..windows
+            };
+            let (p, q) = (DVec2::new(at, 0.0), DVec2::new(at + door, 0.0));
+            d.glazing(DVec2::new(x0, 0.0), p, 0.0, &windows);
+            d.glazing(p, q, 0.0, &entrance);
+            d.glazing(q, DVec2::new(x1, 0.0), 0.0, &windows);
             let corners = [
                 DVec2::new(x0, 0.0),
                 DVec2::new(x1, 0.0),
