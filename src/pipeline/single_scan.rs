@@ -114,6 +114,7 @@ pub fn run_single_scan_into(
             rules: decisions.rules,
             planes: detection.planes.len(),
             candidates: detection.candidates.len(),
+            set_aside: sequence.set_aside(k, frame)?,
         };
         Ok((output, t, frame.second_returns()))
     };

@@ -86,7 +86,7 @@ fn skip_ascii_element(
         if pos >= body.len() {
             return Err(format!(
                 "file ends inside element '{}' before the vertices (truncated?)",
-                el.name
+                crate::error::excerpt(&el.name)
             ));
         }
         let start = skip_blank(body, pos);
