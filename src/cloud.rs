@@ -41,15 +41,24 @@ impl Point {
             && self.intensity.is_finite()
     }
 
-    /// Whether the point can be a return: [finite](Self::is_finite) and
-    /// not exactly at the sensor origin (drivers write `(0, 0, 0)` for a
-    /// beam without an echo; no surface is measured at range 0). The
-    /// points the readers keep (see [`drop_non_finite`]).
+    /// Whether the point can be a return: [finite](Self::is_finite), not
+    /// exactly at the sensor origin (drivers write `(0, 0, 0)` for a beam
+    /// without an echo; no surface is measured at range 0), and no
+    /// coordinate beyond [`MAX_RETURN_COORDINATE`] (a float's 3e38 is a
+    /// placeholder, not a measurement). The points the readers keep (see
+    /// [`drop_non_finite`]).
     #[inline]
     pub fn is_return(&self) -> bool {
-        self.is_finite() && self.xyz != [0.0; 3]
+        self.is_finite()
+            && self.xyz != [0.0; 3]
+            && self.xyz.iter().all(|c| c.abs() <= MAX_RETURN_COORDINATE)
     }
 }
+
+/// Metres: a coordinate farther from the sensor cannot be a LiDAR return
+/// (1,000 km; the longest-range LiDARs reach a few km), so such a point is
+/// set aside like a NaN one ([`Point::is_return`]).
+pub const MAX_RETURN_COORDINATE: f32 = 1e6;
 
 /// The input points a reader set aside because they cannot be returns
 /// (not [`Point::is_return`]): where they were in the input and their
@@ -200,7 +209,7 @@ pub struct Frame {
     pub has_labels: bool,
     /// Points the reader set aside because a coordinate (x, y or z) or the
     /// intensity was NaN or infinite, or the point lay exactly at the
-    /// origin ([`Point::is_return`]). Real drivers publish such points for
+    /// origin or impossibly far ([`Point::is_return`]). Real drivers publish such points for
     /// beams without a return (ROS 2 `PointCloud2` with `is_dense = false`);
     /// they have no position to classify or map, so they are never in
     /// [`points`](Self::points). Where they were is kept by the source

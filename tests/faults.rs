@@ -442,14 +442,17 @@ fn frames_with_the_same_stem_are_refused() {
 
 /// Case 5: a frame rewritten and truncated again and again while it is
 /// read gives frames or errors, never a SIGBUS (the old reader mapped the
-/// file; a truncation under the map killed the process). Not timed: 400
-/// reads against a writer that flips the file between whole and half.
+/// file; a truncation under the map killed the process, and this test
+/// with it). Not timed: 400 reads of an ascii frame (slow to parse, so a
+/// truncation often lands mid-parse) against a writer that flips the file
+/// between whole and half.
 #[test]
 fn a_frame_shrinking_while_read_is_an_error_not_a_crash() {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("1689496219.652560.ply");
-    let bytes = std::fs::read(common::sample_dir().join("frames/1689496219.652560.ply")).unwrap();
-    std::fs::write(&path, &bytes).unwrap();
+    let frame = io::read_frame(&common::sample_dir().join("frames/1689496219.652560.ply")).unwrap();
+    io::write_frame(&path, &frame, PlyEncoding::Ascii).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let writer = {
         let (path, bytes, stop) = (path.clone(), bytes.clone(), stop.clone());
@@ -458,7 +461,9 @@ fn a_frame_shrinking_while_read_is_an_error_not_a_crash() {
             while !stop.load(std::sync::atomic::Ordering::Relaxed) {
                 let mut f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
                 f.write_all(&bytes).unwrap();
+                std::thread::sleep(std::time::Duration::from_millis(2));
                 f.set_len(bytes.len() as u64 / 2).unwrap();
+                std::thread::yield_now();
             }
         })
     };
@@ -840,4 +845,127 @@ fn bag_metadata_may_not_point_outside_the_bag() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("inside the bag"), "{err}");
+}
+
+/// The sample's frames plus one more, `extra`, named between two of them
+/// (its pose interpolated), written into `dir`; returns the extra's stem.
+fn sample_with(dir: &Path, extra: &str) -> String {
+    common::copy_dir(&common::sample_dir().join("frames"), dir);
+    let name = "1689496220.052700";
+    std::fs::write(dir.join(format!("{name}.ply")), extra).unwrap();
+    name.into()
+}
+
+/// An ascii frame header for `n` vertices (3DRef properties).
+fn ascii_header(n: usize) -> String {
+    format!(
+        "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\n\
+         property float z\nproperty float intensity\nproperty ushort ring\n\
+         property uchar return\nproperty uchar label\nend_header\n"
+    )
+}
+
+/// Weaker case: a frame whose every point is NaN gets all-0 labels, one
+/// per point, in `detect` (both methods) and `slam`; the old code stopped
+/// the run with "frame has no points".
+#[test]
+fn an_all_nan_frame_gets_all_zero_labels() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    let body: String = (0..5).map(|_| "nan nan nan 1 3 1 1\n").collect();
+    let name = sample_with(&frames, &(ascii_header(5) + &body));
+    let poses = sample_poses();
+    let label = |out: &Path| read_u32s(&out.join(format!("predictions/{name}.label")));
+    for method in ["single-scan", "plane-optimized"] {
+        let out = tmp.path().join(method);
+        ok(&specular(&[
+            "detect",
+            "--frames",
+            s(&frames),
+            "--poses",
+            s(&poses),
+            "--out",
+            s(&out),
+            "--method",
+            method,
+            "--lean",
+        ]));
+        assert_eq!(label(&out), vec![0; 5], "{method}");
+    }
+    let out = tmp.path().join("slam");
+    ok(&specular(&[
+        "slam",
+        "--frames",
+        s(&frames),
+        "--gt-poses",
+        s(&poses),
+        "--out",
+        s(&out),
+    ]));
+    assert_eq!(label(&out), vec![0; 5]);
+}
+
+/// Weaker cases: a coordinate of 1e300 in an ascii frame (too large for a
+/// float) is reported as out of range, naming the file and line, not
+/// silently read as infinite; a point at 3e38 (finite) cannot be a return
+/// and is set aside with label 0, not called Normal.
+#[test]
+fn absurd_coordinates_are_out_of_range_or_set_aside() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("1689496220.052700.ply");
+    let text = ascii_header(2) + "1e300 0 0 1 3 1 1\n1 2 3 1 3 1 1\n";
+    std::fs::write(&path, &text).unwrap();
+    let err = io::read_frame(&path).unwrap_err().to_string();
+    assert!(
+        err.contains("1689496220.052700.ply") && err.contains("line 12") && err.contains("range"),
+        "{err}"
+    );
+    // Written "inf", it is a non-return like NaN.
+    std::fs::write(&path, text.replace("1e300", "inf")).unwrap();
+    assert_eq!(io::read_frame(&path).unwrap().dropped_non_finite, 1);
+
+    let frames = tmp.path().join("frames");
+    let name = sample_with(
+        &frames,
+        &(ascii_header(2) + "3e38 0 0 1 3 1 1\n1 2 3 1 3 1 1\n"),
+    );
+    let out = tmp.path().join("out");
+    ok(&specular(&[
+        "detect",
+        "--frames",
+        s(&frames),
+        "--out",
+        s(&out),
+        "--method",
+        "single-scan",
+        "--lean",
+    ]));
+    let labels = read_u32s(&out.join(format!("predictions/{name}.label")));
+    assert_eq!(labels.len(), 2);
+    assert_eq!(labels[0], 0, "a point 3e38 m away was classified");
+}
+
+/// Weaker case: one frame without a `label` property among labelled ones
+/// leaves the run unscored, and the run says so, naming the frame (the old
+/// code said nothing).
+#[test]
+fn one_unlabelled_frame_is_warned_about() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    let header = ascii_header(3).replace("property uchar label\n", "");
+    let body = "1 2 3 1 3 1\n2 2 3 1 4 1\n3 2 3 1 5 1\n";
+    let name = sample_with(&frames, &(header + body));
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&frames),
+        "--out",
+        s(&tmp.path().join("out")),
+        "--method",
+        "single-scan",
+        "--lean",
+    ]);
+    ok(&o);
+    let err = stderr(&o);
+    assert!(err.contains(&name) && err.contains("not scored"), "{err}");
 }

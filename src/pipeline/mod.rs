@@ -147,6 +147,10 @@ pub(crate) struct RunScore {
     rules: RuleTally,
     unlabelled: bool,
     dropped_non_finite: usize,
+    /// Frames with labels seen so far.
+    labelled_frames: usize,
+    /// The first frame without labels, when any.
+    first_unlabelled: Option<String>,
 }
 
 impl RunScore {
@@ -163,6 +167,11 @@ impl RunScore {
             self.dropped_non_finite += frame.dropped_non_finite;
         }
         self.unlabelled |= !frame.has_labels;
+        if frame.has_labels {
+            self.labelled_frames += 1;
+        } else if self.first_unlabelled.is_none() {
+            self.first_unlabelled = Some(path.display().to_string());
+        }
         let labels = frame.points.iter().map(|p| p.label);
         self.confusion
             .add_pairs(labels.clone().zip(output.classes.iter().copied()));
@@ -182,6 +191,14 @@ impl RunScore {
 
     /// The run's output with these scores.
     pub(crate) fn finish(self, frames: Vec<FrameOutput>, timings: StageTimings) -> RunOutput {
+        if let (Some(first), true) = (&self.first_unlabelled, self.labelled_frames > 0) {
+            // One frame without labels leaves the whole run unscored: say
+            // so, rather than print predicted counts as if none had any.
+            tracing::warn!(
+                "{first} has no 'label' property while {} other frames have one: the run is not scored",
+                self.labelled_frames
+            );
+        }
         RunOutput {
             frames,
             confusion: (!self.unlabelled).then_some(self.confusion),
