@@ -969,3 +969,30 @@ fn one_unlabelled_frame_is_warned_about() {
     let err = stderr(&o);
     assert!(err.contains(&name) && err.contains("not scored"), "{err}");
 }
+
+/// Weaker case: a ring beyond the sensor's is an error naming the file,
+/// not only the frame.
+#[test]
+fn a_ring_out_of_range_names_the_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let frames = tmp.path().join("frames");
+    let name = sample_with(
+        &frames,
+        &(ascii_header(2) + "1 2 3 1 300 1 1\n1 2 3 1 3 1 1\n"),
+    );
+    let o = specular(&[
+        "detect",
+        "--frames",
+        s(&frames),
+        "--out",
+        s(&tmp.path().join("out")),
+        "--method",
+        "single-scan",
+    ]);
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains(&format!("{name}.ply")) && err.contains("ring 300"),
+        "{err}"
+    );
+}

@@ -423,7 +423,7 @@ impl Sequence {
                 .par_iter()
                 .map(|&k| {
                     let (frame, read) = self.fetch(k)?;
-                    let out = work(k, &frame)?;
+                    let out = work(k, &frame).map_err(|e| self.naming_file(k, e))?;
                     bar.inc(1);
                     Ok((frame, out, read.unwrap_or_default()))
                 })
@@ -435,6 +435,19 @@ impl Sequence {
         }
         bar.finish_and_clear();
         Ok(reading)
+    }
+
+    /// `error` of the work on frame `index`, naming the frame's file when
+    /// it does not already (e.g. a ring beyond the sensor's, found while
+    /// pairing the returns, named only the frame).
+    fn naming_file(&self, index: usize, error: crate::Error) -> crate::Error {
+        let path = self.path(index);
+        match error {
+            crate::Error::Input(msg) if !msg.contains(&path.display().to_string()) => {
+                crate::Error::format(path, msg)
+            }
+            other => other,
+        }
     }
 
     /// [`stream`](Self::stream) over every frame.
