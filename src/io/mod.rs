@@ -14,6 +14,7 @@ pub mod frames;
 pub mod kitti;
 pub mod labels;
 pub mod map_ply;
+pub mod mcap_file;
 pub mod planes;
 pub mod ply;
 pub mod ros2_bag;

@@ -21,7 +21,7 @@
 //! ([`Dataset::set_aside`]), so outputs keep one label per input point.
 
 use std::borrow::Cow;
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
@@ -38,7 +38,7 @@ pub const POINTCLOUD2: &str = "sensor_msgs/msg/PointCloud2";
 pub const POINTCLOUD2_SCHEMA: &str = "std_msgs/Header header\nuint32 height\nuint32 width\nsensor_msgs/PointField[] fields\nbool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n================================================================================\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n================================================================================\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n================================================================================\nMSG: sensor_msgs/PointField\nuint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n";
 
 /// The first bytes of an MCAP file.
-const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+pub(crate) const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// The first bytes of an SQLite 3 database (rosbag2's `.db3` storage).
 pub(crate) const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 /// The first bytes of a zstd frame (rosbag2's `--compression-mode file`).
@@ -59,7 +59,7 @@ pub fn read_bag_frames(path: &Path, topic: &str) -> Result<Vec<Frame>> {
 pub fn read_bag_frames_full(path: &Path, topic: &str) -> Result<Vec<(Frame, SetAside)>> {
     let mut frames = TopicFrames::new(topic);
     match BagKind::of(path)? {
-        BagKind::Mcap => read_mcap(path, &mut frames)?,
+        BagKind::Mcap => super::mcap_file::read_mcap(path, &mut frames)?,
         BagKind::Sqlite3 => super::db3::read_db3(path, &mut frames)?,
         BagKind::Directory(dir) => {
             super::rosbag2::read_directory_into(&dir, &mut frames)?;
@@ -281,126 +281,6 @@ pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -
         path,
         format!("topic {topic} is {kind} in {encoding}, not {POINTCLOUD2} in cdr"),
     ))
-}
-
-/// Gather the messages of an MCAP file (one file of a bag, or a bag of
-/// its own).
-pub fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    if !bytes.starts_with(MCAP_MAGIC) {
-        return Err(Error::format(path, "not an MCAP file"));
-    }
-    let largest =
-        check_mcap_chunks(&bytes).map_err(|m| Error::format(path, format!("MCAP: {m}")))?;
-    let mcap_error = |e: mcap::McapError| Error::format(path, format!("MCAP: {e}"));
-    // The records are read with the sans-io reader and a record length
-    // limit (no record is longer than the file, or than the largest
-    // chunk's contents): `mcap::MessageStream` sets none, and a damaged
-    // length inside a chunk made it allocate exabytes (an abort).
-    let options = mcap::sans_io::LinearReaderOptions::default()
-        .with_record_length_limit(bytes.len().max(largest));
-    let mut reader = mcap::sans_io::LinearReader::new_with_options(options);
-    let mut rest = &bytes[..];
-    let mut schemas: HashMap<u16, String> = HashMap::new();
-    // Channel id -> (topic, schema id, message encoding).
-    let mut channels: HashMap<u16, (String, u16, String)> = HashMap::new();
-    while let Some(event) = reader.next_event() {
-        match event.map_err(mcap_error)? {
-            mcap::sans_io::LinearReadEvent::ReadRequest(need) => {
-                let n = need.min(rest.len());
-                reader.insert(n).copy_from_slice(&rest[..n]);
-                reader.notify_read(n);
-                rest = &rest[n..];
-            }
-            mcap::sans_io::LinearReadEvent::Record { data, opcode } => {
-                match mcap::parse_record(opcode, data).map_err(mcap_error)? {
-                    mcap::records::Record::Schema { header, .. } => {
-                        schemas.insert(header.id, header.name);
-                    }
-                    mcap::records::Record::Channel(c) => {
-                        channels.insert(c.id, (c.topic, c.schema_id, c.message_encoding));
-                    }
-                    mcap::records::Record::Message { header, data } => {
-                        let Some((topic, schema, encoding)) = channels.get(&header.channel_id)
-                        else {
-                            return Err(Error::format(
-                                path,
-                                format!(
-                                    "MCAP: a message on channel {}, which no channel record declares",
-                                    header.channel_id
-                                ),
-                            ));
-                        };
-                        let kind = schemas.get(schema).map_or("schemaless", String::as_str);
-                        frames.note(path, topic, kind, encoding, 1)?;
-                        if frames.wants(topic) {
-                            frames.push(path, header.log_time as i64, &data)?;
-                        }
-                    }
-                    _ => {}
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-/// The most a chunk may expand when decompressed, as a multiple of its
-/// compressed size (zstd on point clouds gives a few times; far more is a
-/// damaged length field).
-const MAX_CHUNK_EXPANSION: u64 = 256;
-
-/// Walk the records of an MCAP file and check every chunk's claimed
-/// uncompressed size against its compressed size ([`MAX_CHUNK_EXPANSION`]),
-/// before the mcap reader allocates that much: a flipped byte in that
-/// field asked it for exabytes (a capacity-overflow panic, or an abort).
-/// A record that does not fit the file ends the walk (the reader reports
-/// it), after its chunk header, if it is one, is checked against the bytes
-/// that are there. Returns the largest uncompressed size a chunk claims.
-fn check_mcap_chunks(bytes: &[u8]) -> std::result::Result<usize, String> {
-    const CHUNK: u8 = 0x06;
-    let u64_at = |at: usize| -> Option<u64> {
-        Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
-    };
-    let u32_at = |at: usize| -> Option<u32> {
-        Some(u32::from_le_bytes(bytes.get(at..at + 4)?.try_into().ok()?))
-    };
-    let mut pos = MCAP_MAGIC.len();
-    let mut largest = 0u64;
-    while pos + 9 <= bytes.len() {
-        let opcode = bytes[pos];
-        let Some(len) = u64_at(pos + 1) else { break };
-        let body = pos + 9;
-        let end = usize::try_from(len)
-            .ok()
-            .and_then(|l| body.checked_add(l))
-            .filter(|&e| e <= bytes.len());
-        let len = match end {
-            Some(_) => len,
-            None => bytes.len().saturating_sub(body) as u64,
-        };
-        if opcode == CHUNK {
-            // start time, end time, uncompressed size, crc, compression
-            // (a string), then the records' length and bytes.
-            let uncompressed = u64_at(body + 16).unwrap_or(0);
-            let compression = u32_at(body + 28).unwrap_or(0) as usize;
-            let records = body
-                .checked_add(32)
-                .and_then(|p| p.checked_add(compression))
-                .and_then(u64_at)
-                .unwrap_or(0);
-            let compressed = records.min(len);
-            if uncompressed > compressed.saturating_mul(MAX_CHUNK_EXPANSION).max(1 << 20) {
-                return Err(format!(
-                    "a chunk at byte {pos} claims {uncompressed} bytes uncompressed from {compressed}: the file is damaged"
-                ));
-            }
-            largest = largest.max(uncompressed);
-        }
-        let Some(end) = end else { break };
-        pos = end;
-    }
-    Ok(usize::try_from(largest).unwrap_or(usize::MAX))
 }
 
 /// A little-endian CDR reader (alignment relative to the payload start).

@@ -6,14 +6,15 @@
 //! recording order (`relative_file_paths`, several when the recording was
 //! split by size or duration) and the topics with their types and message
 //! counts (`topics_with_message_count`). Every listed file is read, in order,
-//! with the reader of its storage ([`super::ros2_bag::read_mcap`],
+//! with the reader of its storage ([`super::mcap_file::read_mcap`],
 //! [`super::db3::read_db3`]).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::ros2_bag::{check_type, read_mcap, TopicFrames};
+use super::mcap_file::read_mcap;
+use super::ros2_bag::{check_type, TopicFrames};
 use crate::cloud::Frame;
 use crate::{Error, Result};
 
