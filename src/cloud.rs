@@ -32,7 +32,7 @@ impl Point {
     }
 
     /// Whether the position and the intensity are all finite (no NaN, no
-    /// infinity): the points the readers keep (see [`drop_non_finite`]).
+    /// infinity).
     #[inline]
     pub fn is_finite(&self) -> bool {
         self.xyz[0].is_finite()
@@ -40,22 +40,120 @@ impl Point {
             && self.xyz[2].is_finite()
             && self.intensity.is_finite()
     }
+
+    /// Whether the point can be a return: [finite](Self::is_finite), not
+    /// exactly at the sensor origin (drivers write `(0, 0, 0)` for a beam
+    /// without an echo; no surface is measured at range 0), and no
+    /// coordinate beyond [`MAX_RETURN_COORDINATE`] (a float's 3e38 is a
+    /// placeholder, not a measurement). The points the readers keep (see
+    /// [`drop_non_finite`]).
+    #[inline]
+    pub fn is_return(&self) -> bool {
+        self.is_finite()
+            && self.xyz != [0.0; 3]
+            && self.xyz.iter().all(|c| c.abs() <= MAX_RETURN_COORDINATE)
+    }
 }
 
-/// Remove the points that are not [finite](Point::is_finite), keeping the
-/// order of the others (and so their alignment with anything read in the
-/// same order, such as their labels); returns how many were removed.
-///
-/// Every reader (PLY, ROS 2 bag) applies it, so a non-finite point is
-/// treated the same whatever its source: dropped and counted in
-/// [`Frame::dropped_non_finite`], never classified or written.
-pub fn drop_non_finite(points: &mut Vec<Point>) -> usize {
-    let before = points.len();
-    if points.iter().all(Point::is_finite) {
-        return 0;
+/// Metres: a coordinate farther from the sensor cannot be a LiDAR return
+/// (1,000 km; the longest-range LiDARs reach a few km), so such a point is
+/// set aside like a NaN one ([`Point::is_return`]).
+pub const MAX_RETURN_COORDINATE: f32 = 1e6;
+
+/// The input points a reader set aside because they cannot be returns
+/// (not [`Point::is_return`]): where they were in the input and their
+/// labels. Outputs are written one entry per *input* point, so the
+/// classes of the points kept are scattered back to input order with
+/// these positions (label 0 where a point was set aside,
+/// [`SetAside::scatter`]), and scores count these points as unclassified
+/// ([`SetAside::labels`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct SetAside {
+    /// Input positions (0-based, increasing) of the points set aside.
+    pub positions: Vec<u32>,
+    /// Their ground-truth labels (0 when the frame has none), same order.
+    pub labels: Vec<u8>,
+}
+
+impl SetAside {
+    /// Whether no point was set aside.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
     }
-    points.retain(Point::is_finite);
-    before - points.len()
+
+    /// Number of points set aside.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Values per input point: `kept` (one per kept point, in order) with
+    /// `fill` at every position set aside. The result has
+    /// `kept.len() + self.len()` entries.
+    pub fn scatter<T: Copy>(&self, kept: &[T], fill: T) -> Vec<T> {
+        if self.positions.is_empty() {
+            return kept.to_vec();
+        }
+        let total = kept.len() + self.positions.len();
+        let mut out = Vec::with_capacity(total);
+        let mut next = self.positions.iter().peekable();
+        let mut kept = kept.iter();
+        for i in 0..total {
+            if next.peek().is_some_and(|&&p| p as usize == i) {
+                next.next();
+                out.push(fill);
+            } else if let Some(&v) = kept.next() {
+                out.push(v);
+            }
+        }
+        out
+    }
+
+    /// The ground-truth labels per input point: `kept` (the kept points'
+    /// labels) with each point set aside's own label at its position.
+    pub fn scatter_labels(&self, kept: &[u8]) -> Vec<u8> {
+        let mut out = self.scatter(kept, 0);
+        for (&p, &l) in self.positions.iter().zip(&self.labels) {
+            if let Some(slot) = out.get_mut(p as usize) {
+                *slot = l;
+            }
+        }
+        out
+    }
+}
+
+/// Remove the points that cannot be returns ([`Point::is_return`]: not
+/// finite, or exactly at the origin), keeping the order of the others, and
+/// say where they were ([`SetAside`]).
+pub fn set_aside_non_returns(points: &mut Vec<Point>) -> SetAside {
+    if points.iter().all(Point::is_return) {
+        return SetAside::default();
+    }
+    let mut aside = SetAside::default();
+    let mut i = 0u32;
+    points.retain(|p| {
+        let keep = p.is_return();
+        if !keep {
+            aside.positions.push(i);
+            aside.labels.push(p.label);
+        }
+        i += 1;
+        keep
+    });
+    aside
+}
+
+/// Remove the points that cannot be returns ([`Point::is_return`]: not
+/// finite, or exactly at the origin), keeping the order of the others (and
+/// so their alignment with anything read in the same order, such as their
+/// labels); returns how many were removed.
+///
+/// Every reader (PLY, ROS 2 bag) applies it (through
+/// [`set_aside_non_returns`], which also says where they were), so such a
+/// point is treated the same whatever its source: set aside and counted in
+/// [`Frame::dropped_non_finite`], never classified, and written with label
+/// 0 at its input position.
+pub fn drop_non_finite(points: &mut Vec<Point>) -> usize {
+    set_aside_non_returns(points).len()
 }
 
 /// What a return's intensity measures, which decides how it falls with
@@ -109,12 +207,15 @@ pub struct Frame {
     pub points: Vec<Point>,
     /// Whether the source carried ground-truth labels.
     pub has_labels: bool,
-    /// Points the reader dropped because a coordinate (x, y or z) or the
-    /// intensity was NaN or infinite. Real drivers publish such points for
+    /// Points the reader set aside because a coordinate (x, y or z) or the
+    /// intensity was NaN or infinite, or the point lay exactly at the
+    /// origin or impossibly far ([`Point::is_return`]). Real drivers publish such points for
     /// beams without a return (ROS 2 `PointCloud2` with `is_dense = false`);
     /// they have no position to classify or map, so they are never in
-    /// [`points`](Self::points), and this count is all that is left of them
-    /// (reported per frame and per run). 0 for frames built in memory.
+    /// [`points`](Self::points). Where they were is kept by the source
+    /// ([`Dataset::set_aside`](crate::io::Dataset::set_aside)), so outputs
+    /// still carry one label per input point (0 for these). 0 for frames
+    /// built in memory.
     pub dropped_non_finite: usize,
     /// What its intensities measure, when the source says (a PLY comment
     /// `intensity_scale raw-power`, the simulator); `None` leaves it to the

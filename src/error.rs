@@ -52,3 +52,32 @@ impl Error {
         }
     }
 }
+
+/// The most characters of bad input an error message quotes
+/// ([`excerpt`]).
+pub const EXCERPT_CHARS: usize = 80;
+
+/// `text` as an error message quotes it: whole when short, else its first
+/// [`EXCERPT_CHARS`] characters and how long it was. A message about bad
+/// input must stay readable (and small) whatever the input: a 200 MB line
+/// is not printed whole.
+pub fn excerpt(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((end, _)) => {
+            std::borrow::Cow::Owned(format!("{}... ({} bytes in all)", &text[..end], text.len()))
+        }
+    }
+}
+
+/// [`excerpt`] of bytes that may not be UTF-8 (invalid sequences shown as
+/// U+FFFD); only the first bytes are looked at.
+pub fn excerpt_bytes(bytes: &[u8]) -> String {
+    let head = &bytes[..bytes.len().min(EXCERPT_CHARS * 4)];
+    let text = String::from_utf8_lossy(head);
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        None if head.len() == bytes.len() => text.into_owned(),
+        None => format!("{text}... ({} bytes in all)", bytes.len()),
+        Some((end, _)) => format!("{}... ({} bytes in all)", &text[..end], bytes.len()),
+    }
+}

@@ -18,7 +18,10 @@ fn main() -> std::process::ExitCode {
         Ok(()) => std::process::ExitCode::SUCCESS,
         // Ctrl-C or SIGTERM: the shell's convention, 128 + SIGINT.
         Err(_) if cli::interrupted() => {
-            eprintln!("interrupted: the run's outputs are incomplete (see its INCOMPLETE file)");
+            eprintln!(
+                "interrupted: the run's outputs are incomplete (see its INCOMPLETE file; \
+                 a forced rerun leaves the earlier run as it was)"
+            );
             std::process::ExitCode::from(130)
         }
         Err(e) => {

@@ -1,8 +1,10 @@
-//! NaN-safe input end to end (issue 18, finding 3): points with a NaN or
-//! infinite coordinate, as real drivers publish them (`is_dense = false`),
-//! are dropped when read, from PLY frames and from a ROS 2 bag alike: never
-//! classified, never written into the predictions or the maps, and counted
-//! in `metrics.json`.
+//! NaN-safe input end to end (issue 18, finding 3; issue 39, case 1):
+//! points with a NaN or infinite coordinate, as real drivers publish them
+//! (`is_dense = false`), or exactly at the origin, are set aside when read,
+//! from PLY frames and from a ROS 2 bag alike: never classified, never in
+//! the maps, written with label 0 at their input position (one label per
+//! input point, so every later label stays with its point), and counted in
+//! `metrics.json`.
 
 mod common;
 
@@ -28,9 +30,10 @@ fn with_holes(frame: &Frame) -> (Frame, usize) {
     let mut added = 0;
     for (i, p) in frame.points.iter().enumerate() {
         if i % 997 == 0 {
-            let xyz = match added % 3 {
+            let xyz = match added % 4 {
                 0 => [f32::NAN; 3],
                 1 => [p.xyz[0], f32::NAN, p.xyz[2]],
+                2 => [0.0; 3],
                 _ => [f32::INFINITY, p.xyz[1], p.xyz[2]],
             };
             points.push(Point {
@@ -114,10 +117,34 @@ fn write_bag(path: &Path, frames: &[Frame]) {
     w.finish().unwrap();
 }
 
-/// PLY frames and a bag with NaN and infinite points give exactly the
-/// predictions of the clean frames (one per finite point), maps without a
-/// non-finite coordinate, the count in metrics.json and a warning per
-/// frame naming it.
+/// The clean frames' predictions `want` with a 0 at every position of
+/// `holed` where a point cannot be a return: what a run on the holed
+/// frames must write (one label per input point).
+fn with_zeros(want: &BTreeMap<String, Vec<u8>>, holed: &[Frame]) -> BTreeMap<String, Vec<u8>> {
+    holed
+        .iter()
+        .map(|h| {
+            let name = format!("{}.label", h.name);
+            let mut clean = want[&name].chunks_exact(4);
+            let mut out = Vec::with_capacity(4 * h.points.len());
+            for p in &h.points {
+                if p.is_return() {
+                    out.extend_from_slice(clean.next().expect("as many kept points as clean ones"));
+                } else {
+                    out.extend_from_slice(&0u32.to_le_bytes());
+                }
+            }
+            assert!(clean.next().is_none());
+            (name, out)
+        })
+        .collect()
+}
+
+/// PLY frames and a bag with NaN, infinite and origin points give exactly
+/// the predictions of the clean frames with a 0 at each such point (one
+/// label per input point: on the old code the files were shorter and every
+/// later label shifted), maps without a non-finite coordinate, the count in
+/// metrics.json and a warning per frame naming it.
 #[test]
 fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
     let tmp = tempfile::tempdir().unwrap();
@@ -154,6 +181,7 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         assert_eq!(want[&format!("{}.label", f.name)].len(), 4 * f.points.len());
     }
 
+    let want = with_zeros(&want, &holed);
     let from_ply = tmp.path().join("ply");
     let o = detect(&["--frames", frames_dir.to_str().unwrap()], &from_ply);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -161,7 +189,7 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
     assert_eq!(
         common::predictions(&from_ply),
         want,
-        "NaN points change nothing"
+        "NaN points change nothing but their own label, 0"
     );
     assert_eq!(dropped_in_metrics(&from_ply), total as u64);
     for (f, h) in clean.iter().zip(&holed) {

@@ -141,7 +141,7 @@ fn from_file(file: GraphFile) -> Result<FactorGraph> {
     if file.format != FORMAT_NAME {
         return Err(Error::Input(format!(
             "format is '{}', expected '{FORMAT_NAME}'",
-            file.format
+            crate::error::excerpt(&file.format)
         )));
     }
     if file.version != FORMAT_VERSION {

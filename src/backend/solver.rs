@@ -79,6 +79,9 @@ pub enum Termination {
     MaxIterations,
     /// Levenberg–Marquardt could not find a decreasing step.
     DampingLimit,
+    /// Gauss–Newton's step raised the cost however far it was damped
+    /// (halved down to [`MIN_STEP_SCALE`]): stopped, not converged.
+    NoDecrease,
     /// Not an iterative solve (e.g. the averaging back-end).
     NotIterative,
 }
@@ -191,6 +194,10 @@ pub(crate) fn prepare(graph: &FactorGraph, initial: &Values) -> Result<Ordering>
     Ok(Ordering::new(graph, &fixed))
 }
 
+/// The smallest share of a Gauss–Newton step tried when the full step
+/// raises the cost (the step is halved down to it, about 20 halvings).
+pub const MIN_STEP_SCALE: f64 = 1e-6;
+
 /// `(converged, reason)` from the cost change and the step size.
 fn check_convergence(
     params: &SolverParams,
@@ -284,11 +291,42 @@ fn run(
         let candidate = sys.retract(&values, &step)?;
         match method {
             Method::GaussNewton => {
+                let mut candidate = candidate;
+                let mut new_cost = graph.cost(&candidate).unwrap_or(f64::INFINITY);
+                // The full step raises the cost (the linearisation is poor
+                // this far from the solution; large graphs with big
+                // initial errors): damp it, halving it until the cost
+                // falls. A step within the tolerances is taken as before.
+                let settled = check_convergence(params, cost, new_cost, step_norm).is_some();
+                let mut scale = 1.0;
+                while !settled && !(new_cost < cost) && scale > MIN_STEP_SCALE {
+                    scale *= 0.5;
+                    let damped: Vec<f64> = step.iter().map(|v| v * scale).collect();
+                    candidate = sys.retract(&values, &damped)?;
+                    new_cost = graph.cost(&candidate).unwrap_or(f64::INFINITY);
+                }
+                if !settled && !(new_cost < cost) {
+                    // No step along this direction lowers the cost: stop
+                    // at the last values, not converged.
+                    stats.push(IterationStats {
+                        iteration,
+                        cost,
+                        lambda: 0.0,
+                        accepted: false,
+                        assembly_seconds: 0.0,
+                        factorization_seconds: fact_s,
+                        solve_seconds: solve_s,
+                        seconds: t_iter.elapsed().as_secs_f64(),
+                    });
+                    termination = Termination::NoDecrease;
+                    break;
+                }
                 let new_cost = sys.assemble(graph, &candidate)?;
                 totals.assembly += sys.timings.assembly;
                 values = candidate;
                 let old = cost;
                 cost = new_cost;
+                let step_norm = step_norm * scale;
                 stats.push(IterationStats {
                     iteration,
                     cost,
@@ -369,7 +407,7 @@ fn run(
         iterations: stats.len(),
         converged: !matches!(
             termination,
-            Termination::MaxIterations | Termination::DampingLimit
+            Termination::MaxIterations | Termination::DampingLimit | Termination::NoDecrease
         ),
         termination,
         per_iteration: stats,

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use specular::io::{self, PlyEncoding, StampedPose};
 
@@ -52,12 +52,22 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         )?),
         None => None,
     };
+    let frames_dir = args.out.join("frames");
+    let names: Vec<String> = entries.iter().map(|e| e.name.clone()).collect();
+    super::run_dir::refuse_other_frames(&frames_dir, &names)?;
+    std::fs::create_dir_all(&frames_dir)
+        .with_context(|| format!("creating {}", frames_dir.display()))?;
+    // Marked incomplete until written; Ctrl-C / SIGTERM cleans up (exit 130).
+    let guard = super::run_dir::OutputGuard::new(&args.out, std::slice::from_ref(&frames_dir))?;
     let encoding = if args.ascii {
         PlyEncoding::Ascii
     } else {
         PlyEncoding::BinaryLittleEndian
     };
     for e in &entries {
+        if super::run_dir::interrupted() {
+            anyhow::bail!("interrupted");
+        }
         let frame = io::read_frame(&e.path)?;
         io::write_frame(
             &args.out.join("frames").join(format!("{}.ply", e.name)),
@@ -76,6 +86,7 @@ pub fn run(args: ConvertArgs) -> Result<()> {
             .collect();
         io::write_tum(&args.out.join("poses.txt"), &stamped)?;
     }
+    guard.finish()?;
     println!(
         "{} frames written to {}",
         entries.len(),

@@ -39,12 +39,48 @@ pub struct DemoArgs {
     /// Do not write the Foxglove recordings `run.mcap`.
     #[arg(long)]
     pub no_mcap: bool,
+    /// Write into `--out` even when it holds files the demo would replace
+    /// that an earlier demo did not write (e.g. a `report.md` of your own).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Refuse an `--out` holding something the demo would overwrite that is
+/// not an earlier demo's (its index `report.md` starts with the demo's
+/// title; `sim/` and `real/` are checked as run directories when claimed).
+fn check_demo_out(out: &std::path::Path, force: bool) -> Result<()> {
+    if force {
+        return Ok(());
+    }
+    let index = out.join("report.md");
+    if index.exists() {
+        let head = std::fs::read(&index).unwrap_or_default();
+        if !head.starts_with(b"# specular demo\n") {
+            anyhow::bail!(
+                "--out {}: {} is not an earlier demo's index and would be overwritten; give another directory or --force",
+                out.display(),
+                index.display()
+            );
+        }
+    }
+    for part in ["sim", "real"] {
+        let p = out.join(part);
+        if p.exists() && !p.is_dir() {
+            anyhow::bail!(
+                "--out {}: {} is a file, where the demo writes a directory; give another directory",
+                out.display(),
+                p.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Run the demo.
 pub fn run(args: DemoArgs) -> Result<()> {
     let mut config = load_config(&args.config)?;
     config.method = Method::PlaneOptimized;
+    check_demo_out(&args.out, args.force)?;
 
     // 1. Simulated sequence.
     let start = Instant::now();
@@ -64,7 +100,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     // are replaced.
     let sim_dir = RunDir::claim(&sim_out, true)?;
     let Detected { run, map } = detect_into(
-        &sim_out,
+        sim_dir.path(),
         &sequence,
         &config,
         Some(&visual(&args, sim_title.clone())),
@@ -106,7 +142,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
     let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;
     let Detected { run, .. } = detect_into(
-        &real_out,
+        real_dir.path(),
         &sequence,
         &config,
         Some(&visual(&args, real_title.clone())),

@@ -87,7 +87,7 @@ pub fn run(args: DetectArgs) -> Result<()> {
         title: format!("specular detect: {}", input.display()),
     });
     let dir = RunDir::claim(&args.out, args.force)?;
-    let result = detect_into(&args.out, &sequence, &config, visual.as_ref(), args.rules)?;
+    let result = detect_into(dir.path(), &sequence, &config, visual.as_ref(), args.rules)?;
     dir.finish()?;
     let mut timings = result.run.timings.clone();
     timings.wall = wall.elapsed();

@@ -23,6 +23,11 @@ pub struct EvalArgs {
     pub json: Option<PathBuf>,
 }
 
+/// Whether `id` is one a prediction file may hold: a class id (0 to 6).
+fn is_class_id(id: u32) -> bool {
+    id <= 6
+}
+
 /// Run `eval`.
 pub fn run(args: EvalArgs) -> Result<()> {
     let pred_dir = if args.pred.join("predictions").is_dir() {
@@ -33,7 +38,10 @@ pub fn run(args: EvalArgs) -> Result<()> {
     let entries = io::list_frames(&args.frames)?;
     let mut conf = Confusion::default();
     for e in &entries {
-        let frame = io::read_frame(&e.path)?;
+        // Scored against every input point: the labels of the points the
+        // reader set aside (not finite, at the origin) are put back in
+        // place, where a prediction file holds 0.
+        let (frame, aside) = io::read_frame_full(&e.path)?;
         if !frame.has_labels {
             bail!(
                 "{}: frame has no 'label' property, nothing to score against",
@@ -49,17 +57,25 @@ pub fn run(args: EvalArgs) -> Result<()> {
             );
         }
         let pred = io::read_labels(&pred_path)?;
-        if pred.len() != frame.points.len() {
+        let points = frame.points.len() + aside.len();
+        if pred.len() != points {
             bail!(
-                "{}: {} predictions for {} points in {}",
+                "{}: {} predictions for {} points in {} (one per input point)",
                 pred_path.display(),
                 pred.len(),
-                frame.points.len(),
+                points,
                 e.path.display()
             );
         }
+        if let Some((i, bad)) = pred.iter().enumerate().find(|(_, &id)| !is_class_id(id)) {
+            bail!(
+                "{}: point {i} has label {bad}, not a class id (0 unclassified, 1 normal, 2 reflective surface, 5 reflection, 6 obstacle)",
+                pred_path.display()
+            );
+        }
+        let labels = aside.scatter_labels(&frame.labels());
         let classes: Vec<Class> = pred.iter().map(|&id| Class::from_id(id)).collect();
-        conf.add(&frame.labels(), &classes);
+        conf.add(&labels, &classes);
     }
     let metrics = conf.metrics();
     println!("{} frames scored", entries.len());

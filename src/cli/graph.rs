@@ -156,10 +156,6 @@ pub fn run(args: GraphArgs) -> Result<()> {
                 Some(path) => Some(pose_stamps(path, g.values.poses.len())?),
                 None => None,
             };
-            let dir = match &out {
-                Some(out) => Some(RunDir::claim(out, force)?),
-                None => None,
-            };
             let name = match which {
                 BackendArg::Average => BackendName::Average,
                 BackendArg::Gn => BackendName::Gn,
@@ -176,6 +172,24 @@ pub fn run(args: GraphArgs) -> Result<()> {
                 .optimize(&g, &g.values)
                 .with_context(|| format!("solving {}", graph.display()))?;
             let seconds = t0.elapsed().as_secs_f64();
+            // A solution worse than the start is no solution: nothing is
+            // written (Gauss-Newton damps a step that raises the cost, so
+            // this guards the other back-ends and anything unforeseen).
+            if r.final_cost.is_nan() || r.final_cost > r.initial_cost {
+                bail!(
+                    "{}: the {} solve diverged (cost {:.6e} at the start, {:.6e} at the end); no solution written (try --backend lm)",
+                    graph.display(),
+                    b.name(),
+                    r.initial_cost,
+                    r.final_cost
+                );
+            }
+            // Claimed only now: a graph that cannot be solved leaves an
+            // earlier solution in --out as it was.
+            let dir = match &out {
+                Some(out) => Some(RunDir::claim(out, force)?),
+                None => None,
+            };
             let printed = if report {
                 serde_json::to_string_pretty(&r)?
             } else {
@@ -193,7 +207,7 @@ pub fn run(args: GraphArgs) -> Result<()> {
             };
             println!("{printed}");
             if let (Some(out), Some(dir)) = (&out, dir) {
-                write_solution(out, &g, solved, stamps.as_deref(), &printed)?;
+                write_solution(dir.path(), &g, solved, stamps.as_deref(), &printed)?;
                 dir.finish()?;
                 eprintln!("poses.txt, graph.json, solve.json in {}", out.display());
             }

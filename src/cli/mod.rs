@@ -19,7 +19,7 @@ mod visual;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use specular::config::{Config, Method};
 
@@ -110,6 +110,9 @@ pub fn run() -> Result<()> {
             } else {
                 // A file: say what it layers over and what it changes.
                 let (merged, layering) = Config::load_layered(std::path::Path::new(&config))?;
+                // The sensor it names must exist (a run would fail on it).
+                specular::sensor::SensorModel::resolve(&merged.sensor)
+                    .with_context(|| format!("{config}: sensor"))?;
                 print!("{}\n{}", layering.comment(), merged.to_toml());
             }
             Ok(())

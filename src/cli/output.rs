@@ -144,10 +144,11 @@ impl FrameSink for RunWriter {
         if super::run_dir::interrupted() {
             return Err(specular::Error::Input("interrupted".into()));
         }
-        let ids: Vec<u8> = output.classes.iter().map(|c| c.id()).collect();
+        // One entry per input point: 0 where the reader set a point aside.
+        let ids = output.input_class_ids();
         io::write_labels(&self.partial.join(format!("{}.label", output.name)), &ids)?;
         if self.options.rules {
-            let rules: Vec<u8> = output.rules.iter().map(|r| r.id()).collect();
+            let rules = output.input_rule_ids();
             io::write_labels(&self.partial.join(format!("{}.rule", output.name)), &rules)?;
         }
         if let Some(pose) = pose {

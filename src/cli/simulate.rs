@@ -82,6 +82,14 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         refuse_stale_frames(dir, &names)?;
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
+    // Marked incomplete until written; Ctrl-C / SIGTERM cleans up (exit 130).
+    let guard = match (&args.out, &frames_dir) {
+        (Some(out), Some(dir)) => Some(super::run_dir::OutputGuard::new(
+            out,
+            std::slice::from_ref(dir),
+        )?),
+        _ => None,
+    };
     let encoding = if args.ascii {
         PlyEncoding::Ascii
     } else {
@@ -96,6 +104,9 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         .into_par_iter()
         .map(|k| -> specular::Result<(LabelCounts, PlaneTally)> {
             let f = sim.frame(k, seed);
+            if super::run_dir::interrupted() {
+                return Err(specular::Error::Input("interrupted".into()));
+            }
             if let Some(dir) = &frames_dir {
                 io::write_frame(&dir.join(format!("{}.ply", names[k])), &f.frame, encoding)?;
             }
@@ -120,6 +131,9 @@ pub fn run(args: SimulateArgs) -> Result<()> {
             let path = out.join("scene.toml");
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
         }
+    }
+    if let Some(guard) = guard {
+        guard.finish()?;
     }
     println!(
         "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",

@@ -87,7 +87,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
     sequence = sequence.with_frame_cache(config.input.frame_cache_mb);
     let mut slam = optimize_tracked(tracked, &config)?;
     slam.timings.wall = wall.elapsed();
-    let out = &args.out;
+    let out = dir.path();
 
     // Poses, map, per-frame report.
     let stamped: Vec<StampedPose> = sequence
@@ -264,7 +264,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
     );
     println!(
         "poses.txt, planes.json, frames.csv, metrics.json, trajectory.png in {}",
-        out.display()
+        args.out.display()
     );
     for line in input.lines() {
         println!("{line}");

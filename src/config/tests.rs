@@ -144,7 +144,9 @@ fn misspelt_keys_suggest_the_closest() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("valid keys here: frame_cache_mb, pose_interpolation_gap, pose_tolerance"),
+        e.contains(
+            "valid keys here: frame_cache_mb, max_pose_translation, max_speed, pose_interpolation_gap, pose_tolerance"
+        ),
         "{e}"
     );
     let e = Config::from_toml("extend = \"paper\"", Path::new("my.toml"))

@@ -36,6 +36,11 @@ impl Config {
                 self.slam.frame_matching.max_centroid_distance,
             ),
             ("slam.rpe_segment", self.slam.rpe_segment),
+            (
+                "input.max_pose_translation",
+                self.input.max_pose_translation,
+            ),
+            ("input.max_speed", self.input.max_speed),
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
@@ -46,6 +51,12 @@ impl Config {
         if !(gap >= 0.0 && gap.is_finite()) {
             return Err(format!(
                 "input.pose_interpolation_gap must be >= 0 (0: never interpolate), got {gap}"
+            ));
+        }
+        let cache = self.input.frame_cache_mb;
+        if !(cache >= 0.0 && cache.is_finite()) {
+            return Err(format!(
+                "input.frame_cache_mb must be a number of megabytes >= 0 (0: keep no frame), got {cache}"
             ));
         }
         if !(d.ransac.probability > 0.0 && d.ransac.probability < 1.0) {

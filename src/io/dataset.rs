@@ -28,8 +28,8 @@ use std::path::{Path, PathBuf};
 use nalgebra::Isometry3;
 
 use super::frames::{frame_dir, list_frames, read_poses_for, FrameEntry, PoseMatching};
-use super::ply::read_frame;
-use crate::cloud::Frame;
+use super::ply::{read_frame, read_frame_full};
+use crate::cloud::{Frame, SetAside};
 use crate::sensor::SensorModel;
 use crate::{Error, Result};
 
@@ -63,6 +63,26 @@ pub trait Dataset: Send + Sync {
     /// Every frame, when the dataset holds them all in memory.
     fn in_memory(&self) -> Option<&[Frame]> {
         None
+    }
+
+    /// Where the points of frame `index` that are not in
+    /// [`Frame::points`] (counted in [`Frame::dropped_non_finite`]) were in
+    /// its input, so its outputs keep one entry per input point. Asked
+    /// only for a frame that set points aside (never on clean data, so it
+    /// may re-read the frame). The default knows nothing: an error for a
+    /// frame that set points aside, rather than labels shifted against
+    /// their points.
+    fn set_aside(&self, index: usize) -> Result<SetAside> {
+        let frame = self.frame(index)?;
+        if frame.dropped_non_finite == 0 {
+            return Ok(SetAside::default());
+        }
+        Err(Error::Input(format!(
+            "{}: frame {} set {} points aside but the dataset does not say where they were, so its labels cannot be written in input order",
+            self.origin(),
+            frame.name,
+            frame.dropped_non_finite
+        )))
     }
 
     /// Where the frames come from, for messages (a path or a name).
@@ -124,6 +144,10 @@ impl Dataset for PlyDir {
         read_frame(&self.entries[index].path).map(Cow::Owned)
     }
 
+    fn set_aside(&self, index: usize) -> Result<SetAside> {
+        read_frame_full(&self.entries[index].path).map(|(_, aside)| aside)
+    }
+
     fn poses(&self) -> Option<Vec<Isometry3<f64>>> {
         self.poses.clone()
     }
@@ -142,6 +166,8 @@ pub struct InMemory {
     entries: Vec<FrameEntry>,
     frames: Vec<Frame>,
     poses: Option<Vec<Isometry3<f64>>>,
+    /// Per frame, where its points set aside were (empty: none known).
+    set_aside: Vec<SetAside>,
 }
 
 impl InMemory {
@@ -192,7 +218,24 @@ impl InMemory {
             entries,
             frames,
             poses,
+            set_aside: Vec::new(),
         })
+    }
+
+    /// Where each frame's points set aside were (one per frame, same
+    /// order; see [`Dataset::set_aside`]), as the reader that made the
+    /// frames said.
+    pub fn with_set_aside(mut self, set_aside: Vec<SetAside>) -> Result<Self> {
+        if set_aside.len() != self.frames.len() {
+            return Err(Error::Input(format!(
+                "{}: {} set-aside lists for {} frames",
+                self.origin,
+                set_aside.len(),
+                self.frames.len()
+            )));
+        }
+        self.set_aside = set_aside;
+        Ok(self)
     }
 }
 
@@ -211,6 +254,18 @@ impl Dataset for InMemory {
 
     fn in_memory(&self) -> Option<&[Frame]> {
         Some(&self.frames)
+    }
+
+    fn set_aside(&self, index: usize) -> Result<SetAside> {
+        let frame = &self.frames[index];
+        match self.set_aside.get(index) {
+            Some(aside) => Ok(aside.clone()),
+            None if frame.dropped_non_finite == 0 => Ok(SetAside::default()),
+            None => Err(Error::Input(format!(
+                "{}: frame {} set {} points aside but the dataset does not say where they were, so its labels cannot be written in input order",
+                self.origin, frame.name, frame.dropped_non_finite
+            ))),
+        }
     }
 
     fn origin(&self) -> String {

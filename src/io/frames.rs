@@ -64,8 +64,21 @@ pub fn list_frames(dir: &Path) -> Result<Vec<FrameEntry>> {
         let is_ply = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-        if !is_ply || !path.is_file() {
+        if !is_ply {
             continue;
+        }
+        if !path.is_file() {
+            // Named as a frame but not one: say so rather than run on
+            // without it.
+            let what = match std::fs::symlink_metadata(&path) {
+                Ok(m) if m.file_type().is_symlink() => "a symbolic link to nothing readable",
+                Ok(m) if m.is_dir() => "a directory",
+                _ => "not a regular file (a FIFO, socket or device)",
+            };
+            return Err(Error::format(
+                &path,
+                format!("named as a frame but is {what}: remove or rename it"),
+            ));
         }
         let (name, stamp) = parse_stamp(&path)?;
         frames.push(FrameEntry { path, name, stamp });
@@ -80,7 +93,19 @@ pub fn list_frames(dir: &Path) -> Result<Vec<FrameEntry>> {
         a.stamp
             .total_cmp(&b.stamp)
             .then_with(|| a.name.cmp(&b.name))
+            .then_with(|| a.path.cmp(&b.path))
     });
+    // Outputs are named after the stem: two frames with one stem
+    // (`X.ply` and `X.PLY`) would write over each other's labels.
+    if let Some(w) = frames.windows(2).find(|w| w[0].name == w[1].name) {
+        return Err(Error::format(
+            &w[0].path,
+            format!(
+                "{} has the same stem, so their outputs would have the same name: keep one",
+                w[1].path.display()
+            ),
+        ));
+    }
     Ok(frames)
 }
 
@@ -102,14 +127,30 @@ pub struct PoseMatching {
     /// before and after it (linear in translation, SLERP in rotation) when
     /// they are at most this many seconds apart (0: never).
     pub max_gap: f64,
+    /// Metres: a longer pose translation is an error naming its line
+    /// (`input.max_pose_translation`).
+    pub max_translation: f64,
+    /// Metres per second: consecutive frames whose poses are farther apart
+    /// for the time between them are an error (`input.max_speed`).
+    pub max_speed: f64,
 }
 
+/// The default of `input.max_pose_translation`, metres: no sensor is
+/// 100 km from its map origin.
+pub const DEFAULT_MAX_POSE_TRANSLATION: f64 = 1e5;
+
+/// The default of `input.max_speed`, metres per second (360 km/h).
+pub const DEFAULT_MAX_SPEED: f64 = 100.0;
+
 impl From<f64> for PoseMatching {
-    /// The nearest pose within `tolerance` seconds, no interpolation.
+    /// The nearest pose within `tolerance` seconds, no interpolation, the
+    /// default pose sanity bounds.
     fn from(tolerance: f64) -> Self {
         Self {
             tolerance,
             max_gap: 0.0,
+            max_translation: DEFAULT_MAX_POSE_TRANSLATION,
+            max_speed: DEFAULT_MAX_SPEED,
         }
     }
 }
@@ -136,7 +177,9 @@ pub fn match_poses_with(
     matching: PoseMatching,
     poses_path: &Path,
 ) -> Result<Vec<Isometry3<f64>>> {
-    let PoseMatching { tolerance, max_gap } = matching;
+    let PoseMatching {
+        tolerance, max_gap, ..
+    } = matching;
     for (name, v) in [("tolerance", tolerance), ("interpolation gap", max_gap)] {
         if v.is_nan() || v < 0.0 {
             return Err(Error::Config(format!(
@@ -235,7 +278,7 @@ pub fn read_poses_for(
 ) -> Result<Vec<Isometry3<f64>>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if super::kitti::is_kitti(&bytes) {
-        let poses = super::kitti::parse_kitti(&bytes, path)?;
+        let poses = super::kitti::parse_kitti_lines(&bytes, path)?;
         if poses.len() != frames.len() {
             return Err(Error::format(
                 path,
@@ -246,10 +289,107 @@ pub fn read_poses_for(
                 ),
             ));
         }
+        for (line, pose) in &poses {
+            check_translation(path, *line, pose, matching.max_translation)?;
+        }
+        let lines: Vec<usize> = poses.iter().map(|(l, _)| *l).collect();
+        let poses: Vec<Isometry3<f64>> = poses.into_iter().map(|(_, p)| p).collect();
+        check_speed(frames, &poses, &lines, path, matching.max_speed)?;
         return Ok(poses);
     }
-    let stamped = super::tum::parse_tum(&bytes, path)?;
-    match_poses_with(frames, &stamped, matching, path)
+    let lined = super::tum::parse_tum_lines(&bytes, path)?;
+    for (line, p) in &lined {
+        check_translation(path, *line, &p.pose, matching.max_translation)?;
+    }
+    // Two poses for one instant must agree (a file concatenated from two
+    // runs, or two sensors' poses mixed, would otherwise be matched at
+    // random).
+    let mut by_time: Vec<&(usize, StampedPose)> = lined.iter().collect();
+    by_time.sort_by(|a, b| a.1.stamp.total_cmp(&b.1.stamp).then(a.0.cmp(&b.0)));
+    for w in by_time.windows(2) {
+        let ((la, a), (lb, b)) = (w[0], w[1]);
+        if a.stamp == b.stamp && a.pose != b.pose {
+            return Err(Error::format(
+                path,
+                format!(
+                    "lines {la} and {lb} give different poses for the same timestamp {}",
+                    a.stamp
+                ),
+            ));
+        }
+    }
+    let stamped: Vec<StampedPose> = lined.iter().map(|(_, p)| *p).collect();
+    let poses = match_poses_with(frames, &stamped, matching, path)?;
+    // The line of the pose nearest each frame in time, for messages.
+    let lines: Vec<usize> = frames
+        .iter()
+        .map(|f| {
+            let i = by_time.partition_point(|p| p.1.stamp < f.stamp);
+            [i.checked_sub(1), Some(i)]
+                .into_iter()
+                .flatten()
+                .filter_map(|j| by_time.get(j))
+                .min_by(|a, b| {
+                    (a.1.stamp - f.stamp)
+                        .abs()
+                        .total_cmp(&(b.1.stamp - f.stamp).abs())
+                })
+                .map_or(0, |p| p.0)
+        })
+        .collect();
+    check_speed(frames, &poses, &lines, path, matching.max_speed)?;
+    Ok(poses)
+}
+
+/// An error naming `path` and `line` when `pose` lies farther than
+/// `max_translation` metres from the origin.
+fn check_translation(
+    path: &Path,
+    line: usize,
+    pose: &Isometry3<f64>,
+    max_translation: f64,
+) -> Result<()> {
+    let t = pose.translation.vector.norm();
+    if t > max_translation {
+        return Err(Error::format(
+            path,
+            format!(
+                "line {line}: the pose is {t:.3e} m from the origin, beyond input.max_pose_translation ({max_translation} m): not a sensor pose (a corrupt number or a wrong unit?)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// An error naming `path` and the line of the later pose when two
+/// consecutive frames' poses are farther apart than `max_speed` metres per
+/// second of the time between the frames (`lines`: per frame, the line of
+/// its pose).
+fn check_speed(
+    frames: &[FrameEntry],
+    poses: &[Isometry3<f64>],
+    lines: &[usize],
+    path: &Path,
+    max_speed: f64,
+) -> Result<()> {
+    for k in 1..frames.len().min(poses.len()) {
+        let dt = frames[k].stamp - frames[k - 1].stamp;
+        let d = (poses[k].translation.vector - poses[k - 1].translation.vector).norm();
+        if dt > 0.0 && d > max_speed * dt {
+            return Err(Error::format(
+                path,
+                format!(
+                    "line {}: the poses of frames {} and {} are {d:.3} m apart in {} s ({:.1} m/s), faster than input.max_speed ({max_speed} m/s): not a sensor's motion",
+                    lines.get(k).copied().unwrap_or(0),
+                    frames[k - 1].name,
+                    frames[k].name,
+                    secs(dt),
+                    d / dt
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The pose a share `s` (0..1) of the way from `a` to `b`: linear in
@@ -325,6 +465,7 @@ mod tests {
         let matching = PoseMatching {
             tolerance: 0.005,
             max_gap: 0.2,
+            ..PoseMatching::from(0.0)
         };
         let path = Path::new("p.txt");
         let m = match_poses_with(&[frame(1.025)], &poses, matching, path).unwrap();

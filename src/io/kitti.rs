@@ -17,6 +17,14 @@ pub fn read_kitti(path: &Path) -> Result<Vec<Isometry3<f64>>> {
 
 /// Parse the content of a KITTI pose file (`path` names it in errors).
 pub fn parse_kitti(bytes: &[u8], path: &Path) -> Result<Vec<Isometry3<f64>>> {
+    Ok(parse_kitti_lines(bytes, path)?
+        .into_iter()
+        .map(|(_, pose)| pose)
+        .collect())
+}
+
+/// [`parse_kitti`], each pose with its 1-based line number in the file.
+pub fn parse_kitti_lines(bytes: &[u8], path: &Path) -> Result<Vec<(usize, Isometry3<f64>)>> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::format(path, format!("not valid UTF-8 text ({e})")))?;
     let mut poses = Vec::new();
@@ -32,7 +40,12 @@ pub fn parse_kitti(bytes: &[u8], path: &Path) -> Result<Vec<Isometry3<f64>>> {
                 t.parse::<f64>()
                     .ok()
                     .filter(|x| x.is_finite())
-                    .ok_or_else(|| fail(format!("'{t}' is not a finite number")))
+                    .ok_or_else(|| {
+                        fail(format!(
+                            "'{}' is not a finite number",
+                            crate::error::excerpt(t)
+                        ))
+                    })
             })
             .collect::<Result<_>>()?;
         if v.len() != 12 {
@@ -51,9 +64,9 @@ pub fn parse_kitti(bytes: &[u8], path: &Path) -> Result<Vec<Isometry3<f64>>> {
         }
         // The nearest rotation to R (removes the file's rounding).
         let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&r));
-        poses.push(Isometry3::from_parts(
-            Translation3::new(v[3], v[7], v[11]),
-            rotation,
+        poses.push((
+            i + 1,
+            Isometry3::from_parts(Translation3::new(v[3], v[7], v[11]), rotation),
         ));
     }
     Ok(poses)

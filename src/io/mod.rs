@@ -14,6 +14,7 @@ pub mod frames;
 pub mod kitti;
 pub mod labels;
 pub mod map_ply;
+pub mod mcap_file;
 pub mod planes;
 pub mod ply;
 pub mod ros2_bag;
@@ -30,6 +31,9 @@ pub use kitti::{parse_kitti, read_kitti};
 pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
-pub use ply::{parse_frame, read_frame, read_frames, write_frame, PlyEncoding};
+pub use ply::{
+    parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames, write_frame,
+    PlyEncoding,
+};
 pub use ros2_bag::{read_bag_frames, BagKind, Ros2Bag};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

@@ -13,10 +13,12 @@
 //! file stem.
 //!
 //! Points whose `x`, `y`, `z` or `intensity` is NaN or infinite (drivers
-//! publish them for beams without a return, with `is_dense = false`) are
-//! dropped and counted in [`Frame::dropped_non_finite`], exactly as the PLY
-//! reader does (see [`crate::cloud::drop_non_finite`]); the other points
-//! keep their order and labels.
+//! publish them for beams without a return, with `is_dense = false`), or
+//! that lie exactly at the origin, are set aside and counted in
+//! [`Frame::dropped_non_finite`], exactly as the PLY reader does (see
+//! [`crate::cloud::set_aside_non_returns`]); the other points keep their
+//! order and labels, and the dataset keeps where the ones set aside were
+//! ([`Dataset::set_aside`]), so outputs keep one label per input point.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -25,7 +27,7 @@ use std::path::{Path, PathBuf};
 
 use super::dataset::{Dataset, InMemory};
 use super::frames::FrameEntry;
-use crate::cloud::{drop_non_finite, Frame, Point};
+use crate::cloud::{set_aside_non_returns, Frame, Point, SetAside};
 use crate::{Error, Result};
 
 /// The schema name of a ROS 2 point cloud.
@@ -36,7 +38,7 @@ pub const POINTCLOUD2: &str = "sensor_msgs/msg/PointCloud2";
 pub const POINTCLOUD2_SCHEMA: &str = "std_msgs/Header header\nuint32 height\nuint32 width\nsensor_msgs/PointField[] fields\nbool is_bigendian\nuint32 point_step\nuint32 row_step\nuint8[] data\nbool is_dense\n================================================================================\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n================================================================================\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n================================================================================\nMSG: sensor_msgs/PointField\nuint8 INT8=1\nuint8 UINT8=2\nuint8 INT16=3\nuint8 UINT16=4\nuint8 INT32=5\nuint8 UINT32=6\nuint8 FLOAT32=7\nuint8 FLOAT64=8\nstring name\nuint32 offset\nuint8 datatype\nuint32 count\n";
 
 /// The first bytes of an MCAP file.
-const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+pub(crate) const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// The first bytes of an SQLite 3 database (rosbag2's `.db3` storage).
 pub(crate) const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 /// The first bytes of a zstd frame (rosbag2's `--compression-mode file`).
@@ -46,13 +48,25 @@ const ZSTD_MAGIC: &[u8] = &[0x28, 0xb5, 0x2f, 0xfd];
 /// timestamp order. `path` is a rosbag2 directory (or its `metadata.yaml`),
 /// an MCAP file or an SQLite (`.db3`) file; see [`BagKind::of`].
 pub fn read_bag_frames(path: &Path, topic: &str) -> Result<Vec<Frame>> {
+    Ok(read_bag_frames_full(path, topic)?
+        .into_iter()
+        .map(|(frame, _)| frame)
+        .collect())
+}
+
+/// [`read_bag_frames`], each frame with where its points set aside were
+/// ([`SetAside`]).
+pub fn read_bag_frames_full(path: &Path, topic: &str) -> Result<Vec<(Frame, SetAside)>> {
     let mut frames = TopicFrames::new(topic);
     match BagKind::of(path)? {
-        BagKind::Mcap => read_mcap(path, &mut frames)?,
+        BagKind::Mcap => super::mcap_file::read_mcap(path, &mut frames)?,
         BagKind::Sqlite3 => super::db3::read_db3(path, &mut frames)?,
-        BagKind::Directory(dir) => return super::rosbag2::read_directory(&dir, frames),
+        BagKind::Directory(dir) => {
+            super::rosbag2::read_directory_into(&dir, &mut frames)?;
+            return frames.finish_full(&dir);
+        }
     }
-    frames.finish(path)
+    frames.finish_full(path)
 }
 
 /// A bag's point-cloud topic as a [`Dataset`]: the frames are decoded
@@ -66,9 +80,10 @@ impl Ros2Bag {
     /// The `PointCloud2` frames on `topic` of the bag at `path` (any form
     /// [`BagKind::of`] knows), named by their header stamps.
     pub fn open(path: &Path, topic: &str) -> Result<Self> {
-        let frames = read_bag_frames(path, topic)?;
+        let (frames, aside) = read_bag_frames_full(path, topic)?.into_iter().unzip();
+        let frames = InMemory::new(frames, None, &path.display().to_string())?;
         Ok(Self {
-            frames: InMemory::new(frames, None, &path.display().to_string())?,
+            frames: frames.with_set_aside(aside)?,
         })
     }
 }
@@ -82,6 +97,9 @@ impl Dataset for Ros2Bag {
     }
     fn in_memory(&self) -> Option<&[Frame]> {
         self.frames.in_memory()
+    }
+    fn set_aside(&self, index: usize) -> Result<SetAside> {
+        self.frames.set_aside(index)
     }
     fn origin(&self) -> String {
         self.frames.origin()
@@ -149,7 +167,7 @@ impl BagKind {
 /// topic seen on the way (for the error that lists them).
 pub struct TopicFrames {
     topic: String,
-    frames: Vec<Frame>,
+    frames: Vec<(Frame, SetAside)>,
     /// Topic name -> (type, messages).
     seen: BTreeMap<String, (String, usize)>,
 }
@@ -196,7 +214,7 @@ impl TopicFrames {
     /// Decode one message of the topic gathered, found in `path` at
     /// `time_ns` (the bag's receive time, for the error message).
     pub fn push(&mut self, path: &Path, time_ns: i64, data: &[u8]) -> Result<()> {
-        let frame = decode_pointcloud2(data).map_err(|m| {
+        let frame = decode_pointcloud2_full(data).map_err(|m| {
             Error::format(path, format!("{} message at {time_ns} ns: {m}", self.topic))
         })?;
         self.frames.push(frame);
@@ -219,7 +237,17 @@ impl TopicFrames {
     /// The frames in timestamp order; an error naming `path` when the topic
     /// had no message (listing the topics present) or two messages share a
     /// header stamp (their frames would have the same name).
-    pub fn finish(mut self, path: &Path) -> Result<Vec<Frame>> {
+    pub fn finish(self, path: &Path) -> Result<Vec<Frame>> {
+        Ok(self
+            .finish_full(path)?
+            .into_iter()
+            .map(|(frame, _)| frame)
+            .collect())
+    }
+
+    /// [`finish`](Self::finish), each frame with where its points set
+    /// aside were.
+    pub fn finish_full(mut self, path: &Path) -> Result<Vec<(Frame, SetAside)>> {
         if self.frames.is_empty() {
             return Err(Error::format(
                 path,
@@ -230,13 +258,13 @@ impl TopicFrames {
                 ),
             ));
         }
-        self.frames.sort_by(|a, b| a.stamp.total_cmp(&b.stamp));
-        if let Some(w) = self.frames.windows(2).find(|w| w[0].name == w[1].name) {
+        self.frames.sort_by(|a, b| a.0.stamp.total_cmp(&b.0.stamp));
+        if let Some(w) = self.frames.windows(2).find(|w| w[0].0.name == w[1].0.name) {
             return Err(Error::format(
                 path,
                 format!(
                     "two messages on {} have the same header stamp {}",
-                    self.topic, w[0].name
+                    self.topic, w[0].0.name
                 ),
             ));
         }
@@ -253,28 +281,6 @@ pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -
         path,
         format!("topic {topic} is {kind} in {encoding}, not {POINTCLOUD2} in cdr"),
     ))
-}
-
-/// Gather the messages of an MCAP file (one file of a bag, or a bag of
-/// its own).
-pub fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    if !bytes.starts_with(MCAP_MAGIC) {
-        return Err(Error::format(path, "not an MCAP file"));
-    }
-    let stream = mcap::MessageStream::new(&bytes)
-        .map_err(|e| Error::format(path, format!("not an MCAP file: {e}")))?;
-    for msg in stream {
-        let msg = msg.map_err(|e| Error::format(path, format!("MCAP: {e}")))?;
-        let schema = msg.channel.schema.as_ref().map(|s| s.name.as_str());
-        let topic = &msg.channel.topic;
-        let encoding = &msg.channel.message_encoding;
-        frames.note(path, topic, schema.unwrap_or("schemaless"), encoding, 1)?;
-        if frames.wants(topic) {
-            frames.push(path, msg.log_time as i64, &msg.data)?;
-        }
-    }
-    Ok(())
 }
 
 /// A little-endian CDR reader (alignment relative to the payload start).
@@ -356,6 +362,11 @@ impl Field {
 /// Decode one CDR `sensor_msgs/msg/PointCloud2` into a frame (non-finite
 /// points dropped and counted, see the module documentation).
 pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
+    decode_pointcloud2_full(data).map(|(frame, _)| frame)
+}
+
+/// [`decode_pointcloud2`], and where the points it set aside were.
+pub fn decode_pointcloud2_full(data: &[u8]) -> std::result::Result<(Frame, SetAside), String> {
     let mut c = Cdr::new(data)?;
     let sec = c.u32()? as i32;
     let nanosec = c.u32()?;
@@ -410,16 +421,17 @@ pub fn decode_pointcloud2(data: &[u8]) -> std::result::Result<Frame, String> {
             label: label.map_or(0, |f| f.read(rec) as u8),
         })
         .collect();
-    let dropped_non_finite = drop_non_finite(&mut points);
+    let aside = set_aside_non_returns(&mut points);
     let stamp = sec as f64 + nanosec as f64 * 1e-9;
-    Ok(Frame {
+    let frame = Frame {
         name: format!("{stamp:.6}"),
         stamp,
         points,
         has_labels: label.is_some(),
-        dropped_non_finite,
+        dropped_non_finite: aside.len(),
         intensity_scale: None,
-    })
+    };
+    Ok((frame, aside))
 }
 
 /// Encode a frame as a CDR `sensor_msgs/msg/PointCloud2` (fields `x y z

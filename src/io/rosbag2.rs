@@ -6,14 +6,15 @@
 //! recording order (`relative_file_paths`, several when the recording was
 //! split by size or duration) and the topics with their types and message
 //! counts (`topics_with_message_count`). Every listed file is read, in order,
-//! with the reader of its storage ([`super::ros2_bag::read_mcap`],
+//! with the reader of its storage ([`super::mcap_file::read_mcap`],
 //! [`super::db3::read_db3`]).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::ros2_bag::{check_type, read_mcap, TopicFrames};
+use super::mcap_file::read_mcap;
+use super::ros2_bag::{check_type, TopicFrames};
 use crate::cloud::Frame;
 use crate::{Error, Result};
 
@@ -99,7 +100,10 @@ impl Metadata {
             "sqlite3" => Ok(Storage::Sqlite3),
             other => Err(Error::format(
                 path,
-                format!("storage_identifier '{other}' is not mcap or sqlite3"),
+                format!(
+                    "storage_identifier '{}' is not mcap or sqlite3",
+                    crate::error::excerpt(other)
+                ),
             )),
         }
     }
@@ -154,8 +158,27 @@ pub fn storage_files(dir: &Path, meta: &Path, metadata: &Metadata) -> Result<Vec
         .relative_file_paths
         .iter()
         .map(|rel| {
+            // Only files of the bag: a relative path down from the bag
+            // directory (or, in the old form, starting with its name).
+            let inside = Path::new(rel)
+                .components()
+                .all(|c| matches!(c, std::path::Component::Normal(_)));
+            if rel.is_empty() || !inside {
+                return Err(Error::format(
+                    meta,
+                    format!(
+                        "relative_file_paths lists {}, which is not a path inside the bag directory {}",
+                        crate::error::excerpt(rel),
+                        dir.display()
+                    ),
+                ));
+            }
+            let own_name = dir.file_name().is_some_and(|n| {
+                Path::new(rel).components().next()
+                    == Some(std::path::Component::Normal(n))
+            });
             let here = dir.join(rel);
-            let beside = dir.parent().map(|p| p.join(rel));
+            let beside = dir.parent().filter(|_| own_name).map(|p| p.join(rel));
             match beside {
                 _ if here.is_file() => Ok(here),
                 Some(p) if p.is_file() => Ok(p),
@@ -176,6 +199,12 @@ pub fn storage_files(dir: &Path, meta: &Path, metadata: &Metadata) -> Result<Vec
 /// and checked (storage, compression, the topic's presence and type, the
 /// files listed) before any storage file is opened.
 pub fn read_directory(dir: &Path, mut frames: TopicFrames) -> Result<Vec<Frame>> {
+    read_directory_into(dir, &mut frames)?;
+    frames.finish(dir)
+}
+
+/// [`read_directory`], gathering into `frames` (the caller finishes them).
+pub fn read_directory_into(dir: &Path, frames: &mut TopicFrames) -> Result<()> {
     let meta = dir.join("metadata.yaml");
     let metadata = Metadata::read(&meta)?;
     let storage = metadata.storage(&meta)?;
@@ -185,7 +214,9 @@ pub fn read_directory(dir: &Path, mut frames: TopicFrames) -> Result<Vec<Frame>>
         return Err(Error::format(
             &meta,
             format!(
-                "compression_mode '{mode}' ({format}) is not supported: decompress the bag first (ros2 bag convert)"
+                "compression_mode '{}' ({}) is not supported: decompress the bag first (ros2 bag convert)",
+                crate::error::excerpt(mode),
+                crate::error::excerpt(format)
             ),
         ));
     }
@@ -193,11 +224,11 @@ pub fn read_directory(dir: &Path, mut frames: TopicFrames) -> Result<Vec<Frame>>
     metadata.check_topic(&meta, &topic)?;
     for file in storage_files(dir, &meta, &metadata)? {
         match storage {
-            Storage::Mcap => read_mcap(&file, &mut frames)?,
-            Storage::Sqlite3 => super::db3::read_db3(&file, &mut frames)?,
+            Storage::Mcap => read_mcap(&file, frames)?,
+            Storage::Sqlite3 => super::db3::read_db3(&file, frames)?,
         }
     }
-    frames.finish(dir)
+    Ok(())
 }
 
 #[cfg(test)]

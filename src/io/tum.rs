@@ -33,6 +33,15 @@ pub fn read_tum(path: &Path) -> Result<Vec<StampedPose>> {
 /// Parse the content of a TUM file (`path` names it in errors); see
 /// [`read_tum`].
 pub fn parse_tum(bytes: &[u8], path: &Path) -> Result<Vec<StampedPose>> {
+    Ok(parse_tum_lines(bytes, path)?
+        .into_iter()
+        .map(|(_, pose)| pose)
+        .collect())
+}
+
+/// [`parse_tum`], each pose with its 1-based line number in the file (for
+/// errors found later, such as an implausible pose).
+pub fn parse_tum_lines(bytes: &[u8], path: &Path) -> Result<Vec<(usize, StampedPose)>> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| Error::format(path, format!("not valid UTF-8 text ({e})")))?;
     let mut poses = Vec::new();
@@ -47,13 +56,18 @@ pub fn parse_tum(bytes: &[u8], path: &Path) -> Result<Vec<StampedPose>> {
         let mut n = 0;
         for tok in line.split_ascii_whitespace() {
             if n < 8 {
-                v[n] = tok
-                    .parse()
-                    .map_err(|_| fail(format!("field '{}' is not a number: '{tok}'", FIELDS[n])))?;
+                v[n] = tok.parse().map_err(|_| {
+                    fail(format!(
+                        "field '{}' is not a number: '{}'",
+                        FIELDS[n],
+                        crate::error::excerpt(tok)
+                    ))
+                })?;
                 if !v[n].is_finite() {
                     return Err(fail(format!(
-                        "field '{}' is not finite: '{tok}'",
-                        FIELDS[n]
+                        "field '{}' is not finite: '{}'",
+                        FIELDS[n],
+                        crate::error::excerpt(tok)
                     )));
                 }
             }
@@ -69,13 +83,16 @@ pub fn parse_tum(bytes: &[u8], path: &Path) -> Result<Vec<StampedPose>> {
         if !norm.is_finite() || norm <= 1e-12 {
             return Err(fail("quaternion has zero norm".to_string()));
         }
-        poses.push(StampedPose {
-            stamp: v[0],
-            pose: Isometry3::from_parts(
-                Translation3::new(v[1], v[2], v[3]),
-                UnitQuaternion::new_unchecked(q / norm),
-            ),
-        });
+        poses.push((
+            line_no,
+            StampedPose {
+                stamp: v[0],
+                pose: Isometry3::from_parts(
+                    Translation3::new(v[1], v[2], v[3]),
+                    UnitQuaternion::new_unchecked(q / norm),
+                ),
+            },
+        ));
     }
     Ok(poses)
 }

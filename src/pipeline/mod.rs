@@ -24,7 +24,7 @@ use std::path::Path;
 use nalgebra::Isometry3;
 
 use crate::classify::{Class, Rule, RuleTally};
-use crate::cloud::Frame;
+use crate::cloud::{Frame, SetAside};
 use crate::eval::Confusion;
 use crate::reflect::BoundedPlane;
 use crate::Result;
@@ -43,6 +43,27 @@ pub struct FrameOutput {
     pub planes: usize,
     /// Candidate points found in the frame.
     pub candidates: usize,
+    /// Where the input points its reader set aside (not finite, or at the
+    /// origin; not in `classes`) were: outputs are written per input
+    /// point, label 0 there ([`FrameOutput::input_class_ids`]).
+    pub set_aside: SetAside,
+}
+
+impl FrameOutput {
+    /// The class id of every input point, in input order: the classes
+    /// with 0 (unclassified) at each point set aside. What a `.label`
+    /// file holds.
+    pub fn input_class_ids(&self) -> Vec<u8> {
+        let ids: Vec<u8> = self.classes.iter().map(|c| c.id()).collect();
+        self.set_aside.scatter(&ids, Class::Unclassified.id())
+    }
+
+    /// The id of the rule that decided every input point, in input order
+    /// (0, undecided, at each point set aside). What a `.rule` file holds.
+    pub fn input_rule_ids(&self) -> Vec<u8> {
+        let ids: Vec<u8> = self.rules.iter().map(|r| r.id()).collect();
+        self.set_aside.scatter(&ids, Rule::Undecided.id())
+    }
 }
 
 /// A method's result over a sequence.
@@ -126,6 +147,10 @@ pub(crate) struct RunScore {
     rules: RuleTally,
     unlabelled: bool,
     dropped_non_finite: usize,
+    /// Frames with labels seen so far.
+    labelled_frames: usize,
+    /// The first frame without labels, when any.
+    first_unlabelled: Option<String>,
 }
 
 impl RunScore {
@@ -142,14 +167,38 @@ impl RunScore {
             self.dropped_non_finite += frame.dropped_non_finite;
         }
         self.unlabelled |= !frame.has_labels;
+        if frame.has_labels {
+            self.labelled_frames += 1;
+        } else if self.first_unlabelled.is_none() {
+            self.first_unlabelled = Some(path.display().to_string());
+        }
         let labels = frame.points.iter().map(|p| p.label);
         self.confusion
             .add_pairs(labels.clone().zip(output.classes.iter().copied()));
         self.rules.add(labels, &output.classes, &output.rules);
+        if !output.set_aside.is_empty() {
+            // Scored against every input point: one set aside is
+            // unclassified, decided by no rule.
+            let aside = &output.set_aside;
+            let classes = vec![Class::Unclassified; aside.len()];
+            self.confusion
+                .add_pairs(aside.labels.iter().copied().zip(classes.iter().copied()));
+            let rules = vec![Rule::Undecided; aside.len()];
+            self.rules
+                .add(aside.labels.iter().copied(), &classes, &rules);
+        }
     }
 
     /// The run's output with these scores.
     pub(crate) fn finish(self, frames: Vec<FrameOutput>, timings: StageTimings) -> RunOutput {
+        if let (Some(first), true) = (&self.first_unlabelled, self.labelled_frames > 0) {
+            // One frame without labels leaves the whole run unscored: say
+            // so, rather than print predicted counts as if none had any.
+            tracing::warn!(
+                "{first} has no 'label' property while {} other frames have one: the run is not scored",
+                self.labelled_frames
+            );
+        }
         RunOutput {
             frames,
             confusion: (!self.unlabelled).then_some(self.confusion),

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::StageTimings;
-use crate::cloud::Frame;
+use crate::cloud::{Frame, SetAside};
 use crate::io::{self, Dataset, FrameEntry, InMemory, PlyDir};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
@@ -72,6 +72,16 @@ pub struct InputParams {
     /// sequence do not parse them again; beyond it frames are re-read at
     /// every pass (memory stays bounded whatever the sequence length).
     pub frame_cache_mb: f64,
+    /// Metres: a pose (`T_world_sensor`) whose translation is longer is an
+    /// error naming the pose file and line. No sensor is 100 km from its
+    /// map origin; such a pose is corrupt or in the wrong unit, and would
+    /// silently classify every point as Normal.
+    pub max_pose_translation: f64,
+    /// Metres per second: consecutive frames whose poses are farther apart
+    /// than this times the time between their timestamps are an error
+    /// naming the pose file and line (100 m/s, 360 km/h, is beyond any
+    /// vehicle or person carrying a LiDAR).
+    pub max_speed: f64,
 }
 
 impl InputParams {
@@ -80,6 +90,8 @@ impl InputParams {
         crate::io::PoseMatching {
             tolerance: self.pose_tolerance,
             max_gap: self.pose_interpolation_gap,
+            max_translation: self.max_pose_translation,
+            max_speed: self.max_speed,
         }
     }
 }
@@ -90,6 +102,8 @@ impl Default for InputParams {
             pose_tolerance: 0.01,
             pose_interpolation_gap: 0.0,
             frame_cache_mb: DEFAULT_FRAME_CACHE_MB,
+            max_pose_translation: crate::io::frames::DEFAULT_MAX_POSE_TRANSLATION,
+            max_speed: crate::io::frames::DEFAULT_MAX_SPEED,
         }
     }
 }
@@ -217,24 +231,27 @@ impl Sequence {
     ) -> Result<Self> {
         let sequence = Self::open(dir, poses, tolerance)?;
         let bar = crate::progress::bar(sequence.len(), "parse");
-        let parsed: Vec<(Frame, Duration)> = sequence
+        let parsed: Vec<(Frame, SetAside, Duration)> = sequence
             .entries
             .par_iter()
             .map(|e| {
                 let start = Instant::now();
-                let frame = io::read_frame(&e.path).map(|f| (f, start.elapsed()));
+                let frame = io::read_frame_full(&e.path).map(|(f, a)| (f, a, start.elapsed()));
                 bar.inc(1);
                 frame
             })
             .collect::<Result<_>>()?;
         bar.finish_and_clear();
         let mut frames = Vec::with_capacity(parsed.len());
-        for (f, d) in parsed {
+        let mut aside = Vec::with_capacity(parsed.len());
+        for (f, a, d) in parsed {
             timings.add("parse", d);
             frames.push(f);
+            aside.push(a);
         }
         let origin = sequence.dataset.origin();
-        let held = InMemory::with_entries(sequence.entries, frames, sequence.poses, &origin)?;
+        let held = InMemory::with_entries(sequence.entries, frames, sequence.poses, &origin)?
+            .with_set_aside(aside)?;
         Ok(Self::new(held))
     }
 
@@ -287,6 +304,29 @@ impl Sequence {
     /// they are read or made at every pass).
     pub fn in_memory(&self) -> Option<&[Frame]> {
         self.dataset.in_memory()
+    }
+
+    /// Where the points of frame `index` (`frame`, as this sequence gave
+    /// it) that its reader set aside were in its input
+    /// ([`Dataset::set_aside`]): nothing asked of the dataset for a frame
+    /// that set none aside. An error naming the file when the dataset's
+    /// answer does not fit the frame (the file changed while it was read).
+    pub fn set_aside(&self, index: usize, frame: &Frame) -> Result<SetAside> {
+        if frame.dropped_non_finite == 0 {
+            return Ok(SetAside::default());
+        }
+        let aside = self.dataset.set_aside(index)?;
+        if aside.len() != frame.dropped_non_finite || aside.labels.len() != aside.len() {
+            return Err(crate::Error::format(
+                self.path(index),
+                format!(
+                    "the frame changed while it was read ({} points set aside, then {})",
+                    frame.dropped_non_finite,
+                    aside.len()
+                ),
+            ));
+        }
+        Ok(aside)
     }
 
     /// Frame `index`: lent from the dataset or the cache, or made by the
@@ -383,7 +423,7 @@ impl Sequence {
                 .par_iter()
                 .map(|&k| {
                     let (frame, read) = self.fetch(k)?;
-                    let out = work(k, &frame)?;
+                    let out = work(k, &frame).map_err(|e| self.naming_file(k, e))?;
                     bar.inc(1);
                     Ok((frame, out, read.unwrap_or_default()))
                 })
@@ -395,6 +435,19 @@ impl Sequence {
         }
         bar.finish_and_clear();
         Ok(reading)
+    }
+
+    /// `error` of the work on frame `index`, naming the frame's file when
+    /// it does not already (e.g. a ring beyond the sensor's, found while
+    /// pairing the returns, named only the frame).
+    fn naming_file(&self, index: usize, error: crate::Error) -> crate::Error {
+        let path = self.path(index);
+        match error {
+            crate::Error::Input(msg) if !msg.contains(&path.display().to_string()) => {
+                crate::Error::format(path, msg)
+            }
+            other => other,
+        }
     }
 
     /// [`stream`](Self::stream) over every frame.

@@ -12,9 +12,11 @@ use crate::sensor::{OrganizedScan, SensorModel};
 use crate::{Error, Result};
 
 /// Check that a frame can be processed: it has points (the error names
-/// the file the frame came from).
+/// the file the frame came from). A frame whose every point was set aside
+/// (all NaN, say: a sensor that saw nothing) is not an error: it has
+/// nothing to classify and its labels are all 0.
 pub(crate) fn check_points(sequence: &Sequence, index: usize, frame: &Frame) -> Result<()> {
-    if frame.points.is_empty() {
+    if frame.points.is_empty() && frame.dropped_non_finite == 0 {
         return Err(Error::Input(format!(
             "{}: frame has no points",
             sequence.path(index).display()
@@ -114,6 +116,7 @@ pub fn run_single_scan_into(
             rules: decisions.rules,
             planes: detection.planes.len(),
             candidates: detection.candidates.len(),
+            set_aside: sequence.set_aside(k, frame)?,
         };
         Ok((output, t, frame.second_returns()))
     };

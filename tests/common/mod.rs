@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod faults;
 pub mod strategies;
 
 use std::collections::BTreeMap;

@@ -86,7 +86,7 @@ fn skip_ascii_element(
         if pos >= body.len() {
             return Err(format!(
                 "file ends inside element '{}' before the vertices (truncated?)",
-                el.name
+                crate::error::excerpt(&el.name)
             ));
         }
         let start = skip_blank(body, pos);
@@ -158,6 +158,15 @@ pub(super) fn parse_ascii(
                 Slot::Skip => pos = token_end(b, pos),
                 Slot::X | Slot::Y | Slot::Z | Slot::Intensity => {
                     let (v, end) = number::<f32>(b, pos).ok_or_else(|| bad(pos))?;
+                    if v.is_infinite() && !b[pos..end].iter().any(|c| matches!(c, b'i' | b'I')) {
+                        // A finite number too large for a float (1e300):
+                        // out of range, not "inf" in the file.
+                        return Err(format!(
+                            "line {line}: property '{}' is {}, beyond the range of a float (about 3.4e38)",
+                            crate::error::excerpt(&layout.names[k]),
+                            show_token(&b[pos..end])
+                        ));
+                    }
                     pos = end;
                     match slot {
                         Slot::X => p.xyz[0] = v,

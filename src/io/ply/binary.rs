@@ -32,7 +32,7 @@ pub(super) fn parse_binary(
                 .iter()
                 .rev()
                 .find(|e| e.count > 0)
-                .map_or("?", |e| e.name.as_str())
+                .map_or("?".into(), |e| crate::error::excerpt(&e.name))
         ));
     }
     let stride = el_size(vel);

@@ -2,6 +2,7 @@
 //! the body starts.
 
 use crate::cloud::IntensityScale;
+use crate::error::excerpt as ex;
 
 /// The body encoding a header declares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,8 +144,9 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
                 let name = rest.get(1).copied().unwrap_or("");
                 intensity_scale = Some(IntensityScale::from_name(name).ok_or_else(|| {
                     format!(
-                        "header line {line_no}: unknown intensity_scale '{name}' \
-                         (reflectivity or raw-power)"
+                        "header line {line_no}: unknown intensity_scale '{}' \
+                         (reflectivity or raw-power)",
+                        ex(name)
                     )
                 })?);
             }
@@ -158,7 +160,7 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
                     _ => return Err(format!("header line {line_no}: malformed 'format' line")),
                 };
                 if v != "1.0" {
-                    return Err(format!("unsupported PLY version '{v}' (only 1.0)"));
+                    return Err(format!("unsupported PLY version '{}' (only 1.0)", ex(v)));
                 }
                 format = Some(match f {
                     "ascii" => Format::Ascii,
@@ -168,17 +170,21 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
                                     (use ascii or binary_little_endian)"
                             .to_string())
                     }
-                    other => return Err(format!("unsupported format '{other}'")),
+                    other => return Err(format!("unsupported format '{}'", ex(other))),
                 });
             }
             "element" => {
                 let [name, count] = rest.as_slice() else {
                     return Err(format!(
-                        "header line {line_no}: malformed element line '{line}'"
+                        "header line {line_no}: malformed element line '{}'",
+                        ex(line)
                     ));
                 };
                 let count: usize = count.parse().map_err(|_| {
-                    format!("header line {line_no}: element count '{count}' is not a number")
+                    format!(
+                        "header line {line_no}: element count '{}' is not a number",
+                        ex(count)
+                    )
                 })?;
                 if *name == "vertex" {
                     if vertex.is_some() {
@@ -202,24 +208,26 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
                     ["list", ..] => {
                         return Err(format!(
                             "list properties are not supported (element '{}')",
-                            el.name
+                            ex(&el.name)
                         ))
                     }
                     [ty, name] => {
                         let scalar = Scalar::from_name(ty).ok_or_else(|| {
-                            format!("header line {line_no}: unknown property type '{ty}'")
+                            format!("header line {line_no}: unknown property type '{}'", ex(ty))
                         })?;
                         if el.props.iter().any(|(_, n)| n == name) {
                             return Err(format!(
-                                "element '{}' declares property '{name}' twice",
-                                el.name
+                                "element '{}' declares property '{}' twice",
+                                ex(&el.name),
+                                ex(name)
                             ));
                         }
                         el.props.push((scalar, name.to_string()));
                     }
                     _ => {
                         return Err(format!(
-                            "header line {line_no}: malformed property line '{line}'"
+                            "header line {line_no}: malformed property line '{}'",
+                            ex(line)
                         ))
                     }
                 }
@@ -227,8 +235,9 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
             "end_header" => break,
             other => {
                 return Err(format!(
-                    "header line {line_no}: unknown keyword '{other}' \
-                     (is the end_header line missing?)"
+                    "header line {line_no}: unknown keyword '{}' \
+                     (is the end_header line missing?)",
+                    ex(other)
                 ))
             }
         }

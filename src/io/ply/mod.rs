@@ -19,10 +19,12 @@
 //!
 //! Vertices whose `x`, `y`, `z` or `intensity` is NaN or infinite (`nan`,
 //! `inf` in ascii) are not errors: real recordings hold them for beams
-//! without a return. They are dropped after parsing and counted in
+//! without a return; nor are points exactly at the origin, which drivers
+//! write for the same. They are set aside after parsing and counted in
 //! [`crate::cloud::Frame::dropped_non_finite`], exactly as the ROS 2 bag
-//! reader does (see [`crate::cloud::drop_non_finite`]); the other points
-//! keep their order and their labels. A malformed file (bad header, wrong counts,
+//! reader does (see [`crate::cloud::set_aside_non_returns`]); the other
+//! points keep their order and their labels, and [`read_frame_full`] says
+//! where the ones set aside were, so outputs keep one entry per input point. A malformed file (bad header, wrong counts,
 //! truncated, a field that is not a number, an integer out of range) is
 //! still an error naming the file.
 //!
@@ -39,5 +41,5 @@ mod read;
 mod vertex;
 mod write;
 
-pub use read::{parse_frame, read_frame, read_frames};
+pub use read::{parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames};
 pub use write::{write_frame, PlyEncoding};

@@ -1,4 +1,4 @@
-//! Reading frames: files mapped into memory, parsed by the header's
+//! Reading frames: files read into memory, parsed by the header's
 //! encoding, non-finite points dropped and counted.
 
 use std::path::{Path, PathBuf};
@@ -9,31 +9,27 @@ use super::ascii::parse_ascii;
 use super::binary::parse_binary;
 use super::header::{parse_header, Format};
 use super::vertex::VertexLayout;
-use crate::cloud::{drop_non_finite, Frame};
+use crate::cloud::{set_aside_non_returns, Frame, SetAside};
 use crate::io::frames::parse_stamp;
 use crate::{Error, Result};
 
 /// Read one 3DRef frame. The file stem is the timestamp in seconds.
 ///
-/// The file is mapped into memory (its pages mapped up front) and parsed in
-/// place: for a 3.7 MB frame that costs 0.5 ms, where the kernel's copy into
-/// a buffer cost 1.1 ms. Where it cannot be mapped (a pipe, a special file),
-/// it is read instead.
+/// The file is read into memory and parsed there. It used to be mapped
+/// (0.5 ms for a 3.7 MB frame where the copy costs about 1 ms more), but a
+/// mapped file that another process truncates ends the reading process
+/// with SIGBUS, nothing printed (issue 39: 2 tries in 10); a copy read
+/// from a file that shrinks is at worst truncated, which the parser
+/// reports as an error naming the file.
 pub fn read_frame(path: &Path) -> Result<Frame> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    // SAFETY: the map is only read, and only while this function runs. The
-    // one hazard of a file mapping, another process truncating the file in
-    // that time, ends the process with SIGBUS rather than reading wrong
-    // bytes; reading frames that are being rewritten is not supported.
-    match unsafe { memmap2::MmapOptions::new().populate().map(&file) } {
-        Ok(map) => parse_frame(&map, path),
-        Err(_) => {
-            let mut bytes = Vec::new();
-            let mut file = file;
-            std::io::Read::read_to_end(&mut file, &mut bytes).map_err(|e| Error::io(path, e))?;
-            parse_frame(&bytes, path)
-        }
-    }
+    read_frame_full(path).map(|(frame, _)| frame)
+}
+
+/// [`read_frame`], and where the points it set aside were in the file
+/// ([`SetAside`]): to write or score one entry per input point.
+pub fn read_frame_full(path: &Path) -> Result<(Frame, SetAside)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_frame_full(&bytes, path)
 }
 
 /// Read several frames in parallel (rayon), in the order of `paths`.
@@ -48,6 +44,11 @@ pub fn read_frames(paths: &[PathBuf]) -> Result<Vec<Frame>> {
 /// Parse a frame from the bytes of a PLY file (`path` names it in errors and
 /// gives the stem/timestamp).
 pub fn parse_frame(bytes: &[u8], path: &Path) -> Result<Frame> {
+    parse_frame_full(bytes, path).map(|(frame, _)| frame)
+}
+
+/// [`parse_frame`], and where the points it set aside were ([`SetAside`]).
+pub fn parse_frame_full(bytes: &[u8], path: &Path) -> Result<(Frame, SetAside)> {
     let (name, stamp) = parse_stamp(path)?;
     let fail = |msg: String| Error::format(path, msg);
     let header = parse_header(bytes).map_err(fail)?;
@@ -57,15 +58,16 @@ pub fn parse_frame(bytes: &[u8], path: &Path) -> Result<Frame> {
         Format::Ascii => parse_ascii(body, &header, &layout).map_err(fail)?,
         Format::BinaryLittleEndian => parse_binary(body, &header, &layout).map_err(fail)?,
     };
-    let dropped_non_finite = drop_non_finite(&mut points);
-    Ok(Frame {
+    let aside = set_aside_non_returns(&mut points);
+    let frame = Frame {
         name,
         stamp,
         points,
         has_labels: layout.has_labels,
-        dropped_non_finite,
+        dropped_non_finite: aside.len(),
         intensity_scale: header.intensity_scale,
-    })
+    };
+    Ok((frame, aside))
 }
 
 #[cfg(test)]

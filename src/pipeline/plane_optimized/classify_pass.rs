@@ -50,6 +50,7 @@ pub(super) fn classify_frames(
                 rules: decisions.rules,
                 planes: summaries[k].planes,
                 candidates: summaries[k].candidates,
+                set_aside: sequence.set_aside(k, frame)?,
             };
             let start = Instant::now();
             score.add(sequence.path(k), frame, &output);
