@@ -371,9 +371,10 @@ impl Draft {
     /// sensor's path; returns whether it was placed.
     pub fn solid(&mut self, min: DVec3, max: DVec3, material: &str) -> bool {
         let candidate = Solid { min, max };
-        let overlaps = self.solids.iter().any(|s| {
-            (0..3).all(|i| candidate.min[i] < s.max[i] - 1e-9 && s.min[i] < candidate.max[i] - 1e-9)
-        });
+        let overlaps = self
+            .solids
+            .iter()
+            .any(|s| super::boxes_overlap((candidate.min, candidate.max), (s.min, s.max)));
         if overlaps || self.near_path(min.truncate(), max.truncate(), PATH_CLEARANCE) {
             return false;
         }

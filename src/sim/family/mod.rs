@@ -179,8 +179,8 @@ fn draw_seed(family: &str, seed: u64, attempt: u64) -> u64 {
 }
 
 /// A scene is sound when its path keeps [`SURFACE_CLEARANCE`] from every
-/// surface (sampled every 5 cm over one pass) and no two of its boxes
-/// overlap (their interiors are disjoint).
+/// surface (sampled every 5 cm over one pass). That no two solids overlap
+/// is kept as they are placed ([`Draft::solid`]).
 pub fn validate(scene: &Scene) -> std::result::Result<(), String> {
     let index = SceneIndex::new(&scene.surfaces);
     let t = &scene.trajectory;
