@@ -1,7 +1,7 @@
 //! `specular simulate`: write a simulated 3DRef-style sequence (frames,
 //! true poses, true reflective planes) from a scene.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -79,7 +79,7 @@ pub fn run(args: SimulateArgs) -> Result<()> {
     let names: Vec<String> = (0..n).map(|k| sim.stamp(k).0).collect();
     let frames_dir = args.out.as_ref().map(|o| o.join("frames"));
     if let Some(dir) = &frames_dir {
-        refuse_stale_frames(dir, &names)?;
+        super::run_dir::refuse_other_frames(dir, &names)?;
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     // Marked incomplete until written; Ctrl-C / SIGTERM cleans up (exit 130).
@@ -149,30 +149,6 @@ pub fn run(args: SimulateArgs) -> Result<()> {
     if args.stats {
         println!("{}", LabelCounts::table_header());
         println!("{}", counts.table_row(&scene.name));
-    }
-    Ok(())
-}
-
-/// Refuse to mix runs: `.ply` files in the frames directory that this run
-/// would not overwrite would be read as part of the sequence later.
-fn refuse_stale_frames(dir: &Path, names: &[String]) -> Result<()> {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Ok(()); // no directory yet
-    };
-    let wanted: std::collections::HashSet<&str> = names.iter().map(String::as_str).collect();
-    for entry in entries.flatten() {
-        let path = entry.path();
-        let is_ply = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-        let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
-        if is_ply && !wanted.contains(stem) {
-            anyhow::bail!(
-                "{} already holds frames of another run (e.g. {}); use an empty --out directory",
-                dir.display(),
-                path.display()
-            );
-        }
     }
     Ok(())
 }

@@ -23,6 +23,7 @@ mod atrium;
 mod coated;
 mod corridor;
 mod draft;
+mod furnish;
 mod glass_in_glass;
 mod mirror_hall;
 mod mixed;
