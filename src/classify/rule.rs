@@ -119,6 +119,10 @@ pub struct Decisions {
     pub classes: Vec<Class>,
     /// The rule behind each class.
     pub rules: Vec<Rule>,
+    /// The posterior probability of each point's class given the evidence
+    /// weighed, in [0, 1]. For an unclassified point, the posterior of the
+    /// more probable class, which fell short of the decision threshold.
+    pub confidence: Vec<f32>,
 }
 
 /// Points counted by (rule, predicted class, 3DRef truth label).
@@ -227,6 +231,7 @@ mod tests {
         let d = Decisions {
             classes: vec![Class::Reflection, Class::Obstacle, Class::Reflection],
             rules: vec![Rule::Support, Rule::MirrorRefuted, Rule::Support],
+            confidence: vec![1.0; 3],
         };
         t.add([5u8, 6, 6], &d.classes, &d.rules);
         assert_eq!(t.count(Rule::Support, Class::Reflection, 5), 1);

@@ -39,6 +39,9 @@ pub struct FrameOutput {
     /// The rule that decided each point's class (empty where the method
     /// does not say).
     pub rules: Vec<Rule>,
+    /// The posterior probability of each point's class (empty where the
+    /// method does not say; see [`Decisions::confidence`](crate::classify::Decisions)).
+    pub confidence: Vec<f32>,
     /// Reflective planes detected in the frame.
     pub planes: usize,
     /// Candidate points found in the frame.

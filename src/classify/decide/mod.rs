@@ -371,7 +371,7 @@ pub fn decide_with_hits(
         })
         .unzip();
     if bounded.is_empty() {
-        return Decisions { classes, rules };
+        return hard_decisions(classes, rules);
     }
 
     // Deepest indoor point in front of each plane.
@@ -578,7 +578,21 @@ pub fn decide_with_hits(
             *c = params.ambiguous;
         }
     }
-    Decisions { classes, rules }
+    hard_decisions(classes, rules)
+}
+
+/// The ladder's decisions with their confidence: a rule decides outright, so
+/// a decided point has confidence 1 and an undecided one 0.5 (either class).
+fn hard_decisions(classes: Vec<Class>, rules: Vec<Rule>) -> Decisions {
+    let confidence = classes
+        .iter()
+        .map(|c| if *c == Class::Unclassified { 0.5 } else { 1.0 })
+        .collect();
+    Decisions {
+        classes,
+        rules,
+        confidence,
+    }
 }
 
 #[cfg(test)]

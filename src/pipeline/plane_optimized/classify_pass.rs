@@ -48,6 +48,7 @@ pub(super) fn classify_frames(
                 name: frame.name.clone(),
                 classes: decisions.classes,
                 rules: decisions.rules,
+                confidence: decisions.confidence,
                 planes: summaries[k].planes,
                 candidates: summaries[k].candidates,
                 set_aside: sequence.set_aside(k, frame)?,
