@@ -11,15 +11,17 @@
 
 pub mod boundary;
 pub mod decide;
+pub mod evidence;
 pub mod mirror;
 pub mod plane_map;
 pub mod rule;
 pub mod single_scan;
 pub mod space;
 pub mod support;
+pub mod weighed;
 
 pub use decide::{BeamHit, BeamHits, DecisionParams, SurfaceSupport};
-pub use plane_map::{PlaneMapClassifier, PlaneMapParams};
+pub use plane_map::{DecisionModel, PlaneMapClassifier, PlaneMapParams};
 pub use rule::{Decisions, Rule, RuleTally};
 pub use single_scan::SingleScanClassifier;
 pub use space::{Occupancy, SpaceMap};

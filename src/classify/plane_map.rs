@@ -6,13 +6,30 @@ use serde::{Deserialize, Serialize};
 
 use super::boundary::BeamPlanes;
 use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
+use super::evidence::{Weighing, WeighingParams};
+use super::weighed::{decide_weighed, FrameContext};
+use crate::map::MirrorParams;
 use super::{Classifier, Decisions, FrameInput};
 use crate::reflect::{planes_seen_from, BoundedPlane, EchoSplitParams};
 
+/// How points behind a reflective plane are decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum DecisionModel {
+    /// Every evidence test weighed against the landmark's glass-or-mirror
+    /// prior ([`Weighing`]).
+    #[default]
+    Weighed,
+    /// The paper's first-match rules ([`decide_with_hits`]).
+    Ladder,
+}
+
 /// Parameters of the plane-map classifier.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlaneMapParams {
+    /// How points behind a reflective plane are decided.
+    pub decision_model: DecisionModel,
     /// Hull growth, metres.
     pub hull_margin: f64,
     /// Use the observed surfaces of all frames for the support test (the
@@ -44,13 +61,21 @@ pub struct PlaneMapParams {
     pub space_keyframe_turn_deg: f64,
     /// Per-landmark split of reflected and transmitted echoes by strength.
     pub echo_split: EchoSplitParams,
-    /// The decision thresholds and switches.
+    /// The decision thresholds and switches (the ladder's; the beam test's
+    /// for both models).
     pub decision: DecisionParams,
+    /// Glass or mirror per landmark.
+    pub mirror: MirrorParams,
+    /// The evidence weighed behind reflective planes.
+    pub weighing: WeighingParams,
 }
 
 impl Default for PlaneMapParams {
     fn default() -> Self {
         Self {
+            decision_model: DecisionModel::Weighed,
+            mirror: MirrorParams::default(),
+            weighing: WeighingParams::default(),
             hull_margin: 0.0,
             sequence_support: false,
             support_voxel: 0.05,
@@ -76,15 +101,25 @@ impl Default for PlaneMapParams {
 }
 
 /// Classifies a frame against the global map's reflective planes.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct PlaneMapClassifier {
     params: PlaneMapParams,
+    weighing: Weighing,
 }
 
 impl PlaneMapClassifier {
-    /// A classifier with the given parameters.
-    pub fn new(params: PlaneMapParams) -> Self {
-        Self { params }
+    /// A classifier with the given parameters; an evidence test the
+    /// weighing does not know is an error.
+    pub fn new(params: PlaneMapParams) -> crate::Result<Self> {
+        let weighing = Weighing::from_params(&params.weighing)?;
+        Ok(Self { params, weighing })
+    }
+
+    /// This classifier weighing `weighing` instead of the tests its
+    /// parameters list (a researcher's own tests).
+    pub fn with_weighing(mut self, weighing: Weighing) -> Self {
+        self.weighing = weighing;
+        self
     }
 
     /// The parameters.
@@ -150,9 +185,10 @@ impl Classifier for PlaneMapClassifier {
             .filter(|_| self.params.sequence_support)
             .map(|s| s.in_sensor_frame(input.pose));
         let support = view.as_ref().map(|v| v as &dyn SurfaceSupport);
+        let weighed = self.params.decision_model == DecisionModel::Weighed;
         let space = input
             .space
-            .filter(|_| self.params.decision.space_test)
+            .filter(|_| weighed || self.params.decision.space_test)
             .map(|s| s.in_sensor_frame(input.pose));
         let own_hits;
         let hits = match input.beam_hits {
@@ -162,6 +198,18 @@ impl Classifier for PlaneMapClassifier {
                 &own_hits
             }
         };
+        if weighed {
+            let ctx = FrameContext {
+                frame: input.frame,
+                scan: input.scan,
+                sensor: input.sensor,
+                bounded: &planes,
+                hits,
+                support,
+                space: space.as_ref(),
+            };
+            return decide_weighed(&ctx, &self.params.decision, &self.weighing);
+        }
         decide_with_hits(
             input.frame,
             input.scan,

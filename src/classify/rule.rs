@@ -59,10 +59,15 @@ pub enum Rule {
     /// may continue without an echo: its mirror image lands on a seen
     /// surface, and no surface was seen where it was measured: Reflection.
     PastSeenExtent = 16,
+    /// Weighed: a test from outside the crate weighed most.
+    Weighed = 17,
+    /// Weighed: no test weighed towards the class given; the landmark's
+    /// glass-or-mirror prior decided.
+    Prior = 18,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 17] = [
+pub const RULES: [Rule; 19] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -80,6 +85,8 @@ pub const RULES: [Rule; 17] = [
     Rule::BehindMirror,
     Rule::SeenSurface,
     Rule::PastSeenExtent,
+    Rule::Weighed,
+    Rule::Prior,
 ];
 
 impl Rule {
@@ -108,6 +115,8 @@ impl Rule {
             Rule::BehindMirror => "behind-mirror",
             Rule::SeenSurface => "seen-surface",
             Rule::PastSeenExtent => "past-seen-extent",
+            Rule::Weighed => "weighed",
+            Rule::Prior => "prior",
         }
     }
 }

@@ -9,6 +9,7 @@ pub mod boundary_fit;
 pub mod direct;
 pub mod evidence;
 pub mod ghosts;
+pub mod glass_or_mirror;
 pub mod landmark;
 pub mod merge;
 pub mod panes;
@@ -19,6 +20,7 @@ pub use evidence::{
     EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
 };
 pub use ghosts::{find_ghosts, Ghost, GhostParams};
+pub use glass_or_mirror::{glass_or_mirror, BehindEchoes, GlassOrMirror, MirrorParams};
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};

@@ -70,9 +70,10 @@ pub fn single_scan_classifier(config: &Config) -> Box<dyn Classifier> {
     Box::new(SingleScanClassifier::new(config.single_scan))
 }
 
-/// The plane-map classifier configured in `[plane_map]`.
-pub fn plane_map_classifier(config: &Config) -> PlaneMapClassifier {
-    PlaneMapClassifier::new(config.plane_map)
+/// The plane-map classifier configured in `[plane_map]` (an unknown
+/// evidence test in `plane_map.weighing.tests` is an error).
+pub fn plane_map_classifier(config: &Config) -> crate::Result<PlaneMapClassifier> {
+    PlaneMapClassifier::new(config.plane_map.clone())
 }
 
 /// The map merger named in `[map] merger`.

@@ -187,6 +187,37 @@ impl EchoHistogram {
         self.counts.iter().map(|&c| c as u64).sum()
     }
 
+    /// Echoes counted below `threshold` (by bin centre).
+    pub fn below(&self, threshold: f64) -> u64 {
+        self.total() - self.above(threshold)
+    }
+
+    /// The share of the echoes counted below `threshold` (0 when empty).
+    pub fn share_below(&self, threshold: f64) -> f64 {
+        match self.total() {
+            0 => 0.0,
+            n => self.below(threshold) as f64 / n as f64,
+        }
+    }
+
+    /// The strength below which a share `q` of the echoes lies (bin
+    /// centre); `None` when empty.
+    pub fn quantile(&self, q: f64) -> Option<f64> {
+        let n = self.total();
+        if n == 0 {
+            return None;
+        }
+        let target = (q.clamp(0.0, 1.0) * n as f64).ceil().max(1.0) as u64;
+        let mut seen = 0;
+        for (b, &c) in self.counts.iter().enumerate() {
+            seen += c as u64;
+            if seen >= target {
+                return Some(centre(b));
+            }
+        }
+        Some(centre(BINS - 1))
+    }
+
     /// Echoes counted above `threshold`.
     fn above(&self, threshold: f64) -> u64 {
         self.counts
@@ -258,6 +289,10 @@ pub struct EchoSplit {
     pub incidence_correction: bool,
     /// Whether the weaker group is the reflections (glass: `R < T`).
     pub weak_is_reflection: bool,
+    /// Mean strength of the weaker group, decades.
+    pub weak_mean: f64,
+    /// Mean strength of the stronger group, decades.
+    pub strong_mean: f64,
 }
 
 impl EchoSplit {
@@ -300,6 +335,8 @@ impl EchoSplit {
             range_exponent,
             incidence_correction: p.incidence_correction,
             weak_is_reflection,
+            weak_mean: m0.min(m1),
+            strong_mean: m0.max(m1),
         })
     }
 

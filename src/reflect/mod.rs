@@ -43,12 +43,19 @@ pub struct BoundedPlane {
     /// How the echoes behind this plane split into reflected and
     /// transmitted ones by strength, when learned.
     pub echo_split: Option<EchoSplit>,
-    /// Whether the plane is a mirror: beams behind it never came back
-    /// transmitted, so nothing behind it is real.
-    pub mirror: bool,
+    /// The probability that the plane is a mirror (nothing behind it is
+    /// real) rather than glass, from all of its evidence over the sequence
+    /// ([`glass_or_mirror`](crate::map::glass_or_mirror)); 0 where not
+    /// estimated.
+    pub mirror_probability: f64,
 }
 
 impl BoundedPlane {
+    /// Whether the plane is more likely a mirror than glass.
+    pub fn is_mirror(&self) -> bool {
+        self.mirror_probability > 0.5
+    }
+
     /// Bound `plane` by the hull of `points` projected into its chart.
     pub fn from_points(plane: Plane, points: impl IntoIterator<Item = Point3<f64>>) -> Self {
         let chart = PlaneChart::of(&plane);
@@ -60,7 +67,7 @@ impl BoundedPlane {
             evidence: None,
             panes: None,
             echo_split: None,
-            mirror: false,
+            mirror_probability: 0.0,
         }
     }
 
@@ -176,7 +183,7 @@ impl BoundedPlane {
             evidence: self.evidence.clone(),
             panes: self.panes.clone(),
             echo_split: self.echo_split,
-            mirror: self.mirror,
+            mirror_probability: self.mirror_probability,
         }
     }
 

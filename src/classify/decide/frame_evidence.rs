@@ -13,7 +13,7 @@ use crate::sensor::{OrganizedScan, SensorModel};
 /// within `neighbourhood` rings and columns of `q`'s cell (free space at `q`
 /// is proven only if every one of them passes it). `None` when `q` is outside
 /// the field of view or its own cell is empty.
-pub(super) fn returns_along(
+pub(crate) fn returns_along(
     scan: &OrganizedScan,
     sensor: &SensorModel,
     frame: &Frame,

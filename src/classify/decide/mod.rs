@@ -52,13 +52,15 @@ mod past_extent;
 mod past_pane;
 
 pub use self::beam_hits::{BeamHit, BeamHits};
-use self::frame_evidence::{returns_along, NormalPointIndex};
+pub(crate) use self::frame_evidence::returns_along;
+use self::frame_evidence::NormalPointIndex;
 pub(crate) use self::hypotheses::{two_hypotheses, Verdict};
 pub use self::mirror_support::SurfaceSupport;
 use self::mirror_support::{support_is_perpendicular, supports_itself};
 pub(crate) use self::pane_edge::near_pane_edge;
 use self::pane_edge::real_by_space;
-use self::past_extent::{past_seen_extent, through_glass};
+pub(crate) use self::past_extent::through_glass;
+use self::past_extent::past_seen_extent;
 use self::past_pane::past_second_pane;
 use super::boundary::{beam_crossing, BeamPlanes};
 use super::rule::{Decisions, Rule};
@@ -243,7 +245,7 @@ impl Default for DecisionParams {
 
 /// The per-point outcome of the beam test.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Beam {
+pub(crate) enum Beam {
     Clear,
     Surface,
     WallEcho,
@@ -300,90 +302,13 @@ pub fn decide_with_hits(
     space: Option<&SensorFrameSpace<'_>>,
 ) -> Decisions {
     let n = frame.points.len();
-    let oblique_cos = if params.oblique_single_echo_deg > 0.0 {
-        params.oblique_single_echo_deg.to_radians().cos()
-    } else {
-        -1.0
-    };
-    // 1. Beam test.
-    let beams: Vec<Beam> = frame
-        .points
-        .iter()
-        .enumerate()
-        .map(|(i, pt)| {
-            let p = pt.position();
-            match hits.get(i, &p, bounded) {
-                None => match hits.unseen(i, &p, bounded) {
-                    Some(h) if p.coords.norm() - h.range > params.behind_distance => Beam::Unseen {
-                        plane: h.plane as u16,
-                    },
-                    _ => Beam::Clear,
-                },
-                Some(BeamHit { plane: k, range: t }) => {
-                    let s = p.coords.norm() - t;
-                    if s.abs() <= params.glass_distance {
-                        // A single echo as bright as a wall is the wall.
-                        let single = scan.partner(i).is_none();
-                        let cos = bounded[k].plane.normal.dot(&p.coords) / p.coords.norm();
-                        // Far from normal incidence a single echo brighter
-                        // than the plane's typical glass echo is opaque.
-                        let glass_echo = bounded[k]
-                            .evidence
-                            .as_ref()
-                            .and_then(|e| e.glass_echo_intensity);
-                        if single
-                            && cos.abs() < oblique_cos
-                            && glass_echo.is_none_or(|m| pt.intensity > m)
-                        {
-                            return Beam::Oblique;
-                        }
-                        match &bounded[k].evidence {
-                            Some(e)
-                                if params.wall_echo_test
-                                    && single
-                                    && e.is_opaque_echo(pt.intensity, cos) =>
-                            {
-                                Beam::WallEcho
-                            }
-                            _ => Beam::Surface,
-                        }
-                    } else if s < 0.0 {
-                        Beam::Front
-                    } else if s <= params.behind_distance {
-                        Beam::Band
-                    } else {
-                        Beam::Behind { plane: k as u16 }
-                    }
-                }
-            }
-        })
-        .collect();
-    let (mut classes, mut rules): (Vec<Class>, Vec<Rule>) = beams
-        .iter()
-        .map(|b| match b {
-            Beam::Clear | Beam::Unseen { .. } => (Class::Normal, Rule::NoPane),
-            Beam::Front => (Class::Normal, Rule::InFront),
-            Beam::WallEcho => (Class::Normal, Rule::WallEcho),
-            Beam::Oblique => (Class::Normal, Rule::ObliqueEcho),
-            Beam::Surface => (Class::Glass, Rule::OnPane),
-            Beam::Band => (Class::Unclassified, Rule::Band),
-            Beam::Behind { .. } => (Class::Unclassified, Rule::Undecided),
-        })
-        .unzip();
+    let beams = beam_test(frame, scan, bounded, hits, params);
+    let (mut classes, mut rules) = beam_classes(&beams);
     if bounded.is_empty() {
         return hard_decisions(classes, rules);
     }
 
-    // Deepest indoor point in front of each plane.
-    let mut max_indoor = vec![0.0f64; bounded.len()];
-    for (i, pt) in frame.points.iter().enumerate() {
-        if classes[i] == Class::Normal {
-            let p = pt.position();
-            for (k, bp) in bounded.iter().enumerate() {
-                max_indoor[k] = max_indoor[k].max(bp.plane.signed_distance(&p));
-            }
-        }
-    }
+    let max_indoor = room_depths(frame, bounded, &classes);
 
     let own_support = (params.support_test && params.support_radius > 0.0 && support.is_none())
         .then(|| NormalPointIndex::new(frame, &classes));
@@ -430,7 +355,7 @@ pub fn decide_with_hits(
         );
         // Behind a mirror nothing is real, unless the beam may have passed
         // beside it.
-        if bp.mirror && single_pane {
+        if bp.is_mirror() && single_pane {
             let seen_beside = near_pane_edge(bp, &p, t, params.pane_edge_margin)
                 .then(|| real_by_space(space, support, bp, &p, params))
                 .flatten();
@@ -581,9 +506,110 @@ pub fn decide_with_hits(
     hard_decisions(classes, rules)
 }
 
+/// The beam test of every point against `bounded` (`hits` from
+/// [`BeamHits::compute`]): on, in front of, just behind or behind the first
+/// plane its beam crosses, or clear of every plane.
+pub(crate) fn beam_test(
+    frame: &Frame,
+    scan: &OrganizedScan,
+    bounded: &[BoundedPlane],
+    hits: &BeamHits,
+    params: &DecisionParams,
+) -> Vec<Beam> {
+    let oblique_cos = if params.oblique_single_echo_deg > 0.0 {
+        params.oblique_single_echo_deg.to_radians().cos()
+    } else {
+        -1.0
+    };
+    frame
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, pt)| {
+            let p = pt.position();
+            match hits.get(i, &p, bounded) {
+                None => match hits.unseen(i, &p, bounded) {
+                    Some(h) if p.coords.norm() - h.range > params.behind_distance => Beam::Unseen {
+                        plane: h.plane as u16,
+                    },
+                    _ => Beam::Clear,
+                },
+                Some(BeamHit { plane: k, range: t }) => {
+                    let s = p.coords.norm() - t;
+                    if s.abs() <= params.glass_distance {
+                        // A single echo as bright as a wall is the wall.
+                        let single = scan.partner(i).is_none();
+                        let cos = bounded[k].plane.normal.dot(&p.coords) / p.coords.norm();
+                        // Far from normal incidence a single echo brighter
+                        // than the plane's typical glass echo is opaque.
+                        let glass_echo = bounded[k]
+                            .evidence
+                            .as_ref()
+                            .and_then(|e| e.glass_echo_intensity);
+                        if single
+                            && cos.abs() < oblique_cos
+                            && glass_echo.is_none_or(|m| pt.intensity > m)
+                        {
+                            return Beam::Oblique;
+                        }
+                        match &bounded[k].evidence {
+                            Some(e)
+                                if params.wall_echo_test
+                                    && single
+                                    && e.is_opaque_echo(pt.intensity, cos) =>
+                            {
+                                Beam::WallEcho
+                            }
+                            _ => Beam::Surface,
+                        }
+                    } else if s < 0.0 {
+                        Beam::Front
+                    } else if s <= params.behind_distance {
+                        Beam::Band
+                    } else {
+                        Beam::Behind { plane: k as u16 }
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
+/// The class and rule the beam test alone gives each point (behind-plane
+/// points undecided).
+pub(crate) fn beam_classes(beams: &[Beam]) -> (Vec<Class>, Vec<Rule>) {
+    beams
+        .iter()
+        .map(|b| match b {
+            Beam::Clear | Beam::Unseen { .. } => (Class::Normal, Rule::NoPane),
+            Beam::Front => (Class::Normal, Rule::InFront),
+            Beam::WallEcho => (Class::Normal, Rule::WallEcho),
+            Beam::Oblique => (Class::Normal, Rule::ObliqueEcho),
+            Beam::Surface => (Class::Glass, Rule::OnPane),
+            Beam::Band => (Class::Unclassified, Rule::Band),
+            Beam::Behind { .. } => (Class::Unclassified, Rule::Undecided),
+        })
+        .unzip()
+}
+
+/// Per plane, the deepest Normal point of the frame measured behind it
+/// along its normal (0 at least): the room a reflection could come from.
+pub(crate) fn room_depths(frame: &Frame, bounded: &[BoundedPlane], classes: &[Class]) -> Vec<f64> {
+    let mut max_indoor = vec![0.0f64; bounded.len()];
+    for (pt, c) in frame.points.iter().zip(classes) {
+        if *c == Class::Normal {
+            let p = pt.position();
+            for (k, bp) in bounded.iter().enumerate() {
+                max_indoor[k] = max_indoor[k].max(bp.plane.signed_distance(&p));
+            }
+        }
+    }
+    max_indoor
+}
+
 /// The ladder's decisions with their confidence: a rule decides outright, so
 /// a decided point has confidence 1 and an undecided one 0.5 (either class).
-fn hard_decisions(classes: Vec<Class>, rules: Vec<Rule>) -> Decisions {
+pub(crate) fn hard_decisions(classes: Vec<Class>, rules: Vec<Rule>) -> Decisions {
     let confidence = classes
         .iter()
         .map(|c| if *c == Class::Unclassified { 0.5 } else { 1.0 })
@@ -596,4 +622,4 @@ fn hard_decisions(classes: Vec<Class>, rules: Vec<Rule>) -> Decisions {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -21,7 +21,7 @@ use crate::sensor::{OrganizedScan, SensorModel};
 /// evidence grid). Without any there, a real point behind the plane was
 /// seen through an opening the pane's extent covers (a door, the air above
 /// a railing), and is Normal, not an Obstacle (`reach` 0: always glass).
-pub(super) fn through_glass(bp: &BoundedPlane, p: &Point3<f64>, t: f64, reach: f64) -> bool {
+pub(crate) fn through_glass(bp: &BoundedPlane, p: &Point3<f64>, t: f64, reach: f64) -> bool {
     reach <= 0.0
         || bp.evidence.as_ref().is_none_or(|e| {
             let crossing = Point3::from(p.coords * (t / p.coords.norm()));

@@ -40,7 +40,7 @@ pub(super) fn past_second_pane(
             // Transmitted by the last pane before the return: real.
             return Some(false);
         };
-        if bounded[next].mirror {
+        if bounded[next].is_mirror() {
             return Some(true);
         }
         (pane, at) = (next, t_next);

@@ -10,15 +10,17 @@ use nalgebra::{Isometry3, Point3};
 
 use super::world_maps::rotation_translation;
 use crate::classify::boundary::BeamPlanes;
-use crate::classify::decide::{near_pane_edge, two_hypotheses, SurfaceSupport, Verdict};
+use crate::classify::decide::{near_pane_edge, SurfaceSupport};
 use crate::classify::{
     BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
 use crate::cloud::Frame;
-use crate::map::{find_ghosts, passed_through, Ghost, GhostParams};
+use crate::map::{
+    find_ghosts, glass_or_mirror, passed_through, BehindEchoes, Ghost, GhostParams, GlassOrMirror,
+};
 use crate::pipeline::{Sequence, StageTimings};
-use crate::reflect::echo_split::{echo_strength, is_mirror};
-use crate::reflect::{BoundedPlane, Detection, EchoHistogram, EchoSplit};
+use crate::reflect::echo_split::echo_strength;
+use crate::reflect::{BoundedPlane, Detection, EchoHistogram};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
 
@@ -114,10 +116,14 @@ impl<'a> FrameViews<'a> {
                 .echo_splits(&space_frames, &planes, space, support.as_ref(), timings)?
                 .into_iter()
                 .zip(&planes)
-                .map(|((echo_split, mirror), bp)| BoundedPlane {
-                    echo_split,
+                .map(|(estimate, bp)| BoundedPlane {
+                    echo_split: estimate.echo_split,
                     // Nobody walks through a mirror.
-                    mirror: mirror && !(crossings_open && passed_through(bp, &path)),
+                    mirror_probability: if crossings_open && passed_through(bp, &path) {
+                        0.0
+                    } else {
+                        estimate.mirror_probability
+                    },
                     ..bp.clone()
                 })
                 .collect(),
@@ -309,11 +315,12 @@ impl<'a> FrameViews<'a> {
         space: &SpaceMap,
         support: Option<&WorldSupport>,
         timings: &mut StageTimings,
-    ) -> Result<Vec<(Option<EchoSplit>, bool)>> {
+    ) -> Result<Vec<GlassOrMirror>> {
         let p = self.classifier.params();
         let behind = p.decision.behind_distance;
         let glass = p.decision.glass_distance;
-        let clearance = p.decision.space_clearance_ratio;
+        let seen_space = &p.weighing.seen_space;
+        let clearance = seen_space.clearance_ratio;
         // The frames of a sequence share one intensity scale: the first
         // keyframe's, as its source says (a PLY comment, the simulator),
         // else the sensor model's.
@@ -332,9 +339,11 @@ impl<'a> FrameViews<'a> {
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
-        let blocked_paths = p.echo_split.mirror_blocked_paths;
         let empty = || vec![BehindEchoes::default(); planes.len()];
         let mut totals = empty();
+        // The strengths of the direct echoes (no pane on the beam), what a
+        // mirror's images look like.
+        let mut direct = EchoHistogram::default();
         self.pass(
             frames,
             planes,
@@ -342,6 +351,7 @@ impl<'a> FrameViews<'a> {
             timings,
             |inp, hits| {
                 let mut out = empty();
+                let mut seen_direct = EchoHistogram::default();
                 let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
                 let view = space.in_sensor_frame(inp.pose);
                 let seen = support.map(|s| s.in_sensor_frame(inp.pose));
@@ -350,6 +360,16 @@ impl<'a> FrameViews<'a> {
                 for (i, pt) in inp.frame.points.iter().enumerate() {
                     let pos = pt.position();
                     let Some(h) = hits.get(i, &pos, &sensor_planes) else {
+                        // One column in four is plenty for the room's echoes.
+                        if i % 4 == 0 {
+                            let cos = if incidence {
+                                inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
+                            } else {
+                                1.0
+                            };
+                            let r = pos.coords.norm();
+                            seen_direct.add(echo_strength(pt.intensity, r, exponent, cos));
+                        }
                         continue;
                     };
                     let range = pos.coords.norm();
@@ -393,41 +413,39 @@ impl<'a> FrameViews<'a> {
                     if anchor {
                         stats.anchors.add(strength);
                     }
-                    let transmitted = if blocked_paths {
-                        let plane = &sensor_planes[h.plane].plane;
-                        two_hypotheses(&view, seen, plane, &pos, &p.decision) == Verdict::Real
-                    } else {
-                        anchor
-                    };
-                    stats.transmitted_inside += u64::from(transmitted && !near_edge);
+                    // Real where measured: its mirror image refuted by the
+                    // seen space, its measured position not.
+                    let plane = &sensor_planes[h.plane].plane;
+                    let x = Point3::from(pos.coords * (h.range / range));
+                    let transmitted = !near_edge
+                        && seen_space.refuted(&view, seen, &plane.normal, &x, &mirrored, range)
+                        && !seen_space.refuted(&view, seen, &plane.normal, &x, &pos, range);
+                    stats.transmitted_inside += u64::from(transmitted);
                 }
-                out
+                (out, seen_direct)
             },
-            |frame_counts| {
+            |(frame_counts, frame_direct)| {
                 for (total, frame) in totals.iter_mut().zip(&frame_counts) {
                     total.merge(frame);
                 }
+                direct.merge(&frame_direct);
             },
         )?;
         Ok(totals
             .into_iter()
             .enumerate()
             .map(|(j, t)| {
-                let split = EchoSplit::fit(&t.all, &t.anchors, &p.echo_split, exponent);
-                // A fitted split is two groups of echoes: glass.
-                let mirror = !(p.echo_split.mirror_needs_one_group && split.is_some())
-                    && is_mirror(&t.inside, t.transmitted_inside, &p.echo_split);
+                let estimate = glass_or_mirror(&t, &direct, &p.echo_split, &p.mirror, exponent);
                 tracing::debug!(
                     plane = j,
                     behind = t.all.total(),
                     anchors = t.anchors.total(),
                     inside = t.inside.total(),
                     transmitted_inside = t.transmitted_inside,
-                    ?split,
-                    mirror,
-                    "echo split"
+                    ?estimate,
+                    "glass or mirror"
                 );
-                (split, mirror)
+                estimate
             })
             .collect())
     }
@@ -460,28 +478,4 @@ fn drop_ghosts(
         .map(|(_, p)| p)
         .collect();
     (planes, ghosts)
-}
-
-/// The echoes behind one landmark over the keyframes (integer counts: the
-/// sum does not depend on the order or the threads).
-#[derive(Debug, Clone, Default)]
-struct BehindEchoes {
-    /// The strengths of every point behind it (its echo split).
-    all: EchoHistogram,
-    /// ... of those transmitted for sure (the split's orientation).
-    anchors: EchoHistogram,
-    /// ... of those whose beam crossed it well inside its extent (its
-    /// mirror test: a beam near the edge may have passed beside it).
-    inside: EchoHistogram,
-    /// Points of `inside` that are real where measured.
-    transmitted_inside: u64,
-}
-
-impl BehindEchoes {
-    fn merge(&mut self, other: &Self) {
-        self.all.merge(&other.all);
-        self.anchors.merge(&other.anchors);
-        self.inside.merge(&other.inside);
-        self.transmitted_inside += other.transmitted_inside;
-    }
 }

@@ -116,7 +116,7 @@ pub fn run_plane_optimized_into(
     fuse::bound(sequence, &sensor, &mut fused.planes, config, &mut timings)?;
 
     // 4. What the keyframes saw: surfaces, free space, echo strengths.
-    let classifier = plane_map_classifier(config);
+    let classifier = plane_map_classifier(config)?;
     let views = FrameViews {
         sequence,
         sensor: &sensor,

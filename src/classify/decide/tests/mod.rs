@@ -9,7 +9,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 
 /// A pane at x = 5 (facing the sensor at the origin), 4 m wide and 3 m
 /// high.
-fn pane() -> Vec<BoundedPlane> {
+pub(crate) fn pane() -> Vec<BoundedPlane> {
     let plane = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
     let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
     vec![BoundedPlane::from_points(
@@ -32,7 +32,7 @@ fn two_panes() -> Vec<BoundedPlane> {
 
 /// One frame holding only `points` (sensor frame, single returns).
 /// Each point's ring is the QT64 ring nearest its elevation.
-fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
+pub(crate) fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     Frame {
         name: "synthetic".into(),
@@ -67,7 +67,7 @@ fn empty_grid() -> crate::geometry::grid::EvidenceGrid {
 
 /// The room in front of the pane seen directly from a second pose: its
 /// air carved, its back wall at x = -3 and the floor hit.
-fn room_space() -> SpaceMap {
+pub(crate) fn room_space() -> SpaceMap {
     let mut map = SpaceMap::new(0.1, 2, 1);
     let origin = Point3::new(2.0, 0.0, 0.0);
     for j in -60..=60 {
@@ -178,7 +178,7 @@ fn a_point_in_space_seen_free_is_a_reflection() {
 #[test]
 fn a_point_seen_past_a_mirrors_edge_is_normal() {
     let mut planes = pane();
-    planes[0].mirror = true;
+    planes[0].mirror_probability = 1.0;
     // The pane ends at y = 2: the first beam crosses it at y = 1.93, the
     // second at y = 0.18.
     let points = [[5.5f32, 2.123, 0.3], [5.5, 0.2, 0.3]];
@@ -211,6 +211,8 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
         range_exponent: 2.0,
         incidence_correction: false,
         weak_is_reflection: true,
+        weak_mean: 1.8,
+        strong_mean: 3.8,
     });
     assert_eq!(
         classify(&points, 1.0, &planes, &params),
@@ -341,7 +343,7 @@ fn behind_a_mirror_nothing_is_real() {
         classify(&points, 50.0, &planes, &rule_only(true)),
         [Class::Obstacle]
     );
-    planes[0].mirror = true;
+    planes[0].mirror_probability = 1.0;
     assert_eq!(
         classify(&points, 50.0, &planes, &rule_only(true)),
         [Class::Reflection]
@@ -373,6 +375,8 @@ fn split() -> crate::reflect::EchoSplit {
         range_exponent: 2.0,
         incidence_correction: false,
         weak_is_reflection: true,
+        weak_mean: 1.8,
+        strong_mean: 3.8,
     }
 }
 
@@ -399,11 +403,11 @@ fn past_a_second_pane_the_echo_strength_decides_pane_by_pane() {
     );
     assert_eq!(classify(&points, 1.0, &planes, &off), [Class::Unclassified]);
     // Through the first pane into a mirror: nothing behind it is real.
-    planes[1].mirror = true;
+    planes[1].mirror_probability = 1.0;
     planes[1].echo_split = None;
     assert_eq!(classify(&points, 100.0, &planes, &on), [Class::Reflection]);
     // A second pane without a split leaves a strong echo to other tests.
-    planes[1].mirror = false;
+    planes[1].mirror_probability = 0.0;
     assert_eq!(
         classify(&points, 100.0, &planes, &on),
         [Class::Unclassified]

@@ -1,0 +1,51 @@
+//! Which echo of a dual-return beam the point is.
+
+use serde::{Deserialize, Serialize};
+
+use super::{outcome_weight, BehindPoint, EvidenceTest};
+use crate::classify::rule::Rule;
+
+/// On a beam whose two returns both lie behind the landmark, well apart,
+/// the near one is likelier the reflection (the glass sent part of the beam
+/// back into the room, where it met something nearer than what lies behind)
+/// and the far one the transmitted echo.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct EchoOrder {
+    /// Probability that the order points the wrong way.
+    pub error: f64,
+    /// Two returns at least this far apart are distinct echoes, m.
+    pub min_gap: f64,
+}
+
+impl Default for EchoOrder {
+    fn default() -> Self {
+        Self {
+            error: 0.3,
+            min_gap: 0.1,
+        }
+    }
+}
+
+impl EvidenceTest for EchoOrder {
+    fn name(&self) -> &str {
+        "echo-order"
+    }
+
+    fn rule(&self) -> Rule {
+        Rule::DualReturn
+    }
+
+    fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
+        let other = point.scan.partner(point.index)?;
+        let other_range = point.frame.points[other].range();
+        // Both behind the landmark's crossing, and distinct.
+        if other_range <= point.crossing + self.min_gap
+            || (other_range - point.range).abs() <= self.min_gap
+        {
+            return None;
+        }
+        let w = outcome_weight(self.error);
+        Some(if point.range < other_range { w } else { -w })
+    }
+}

@@ -1,0 +1,69 @@
+//! The weighing's configuration: which tests, and the parameters each owns.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, SeenSpace, SeenSurface};
+
+/// Parameters of the evidence weighing behind reflective landmarks
+/// (`[plane_map.weighing]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WeighingParams {
+    /// The tests weighed, by name: `seen-space`, `seen-surface`,
+    /// `image-support`, `frame-free-space`, `depth`, `echo-strength`,
+    /// `echo-order`.
+    pub tests: Vec<String>,
+    /// The posterior a class needs to be given; a point whose posterior
+    /// falls short either way stays unclassified (probability, 0.5-1).
+    pub threshold: f64,
+    /// Probability that a point behind glass is a reflection before any
+    /// test (behind a mirror every point is one).
+    pub reflection_prior: f64,
+    /// A beam that crossed a landmark within this distance of its extent's
+    /// edge may have passed beside it, m (panes are fitted on 0.2 m evidence
+    /// cells): there the landmark's mirror probability does not count.
+    pub edge_margin: f64,
+    /// The seen-space test's parameters.
+    pub seen_space: SeenSpace,
+    /// The seen-surface test's parameters.
+    pub seen_surface: SeenSurface,
+    /// The image-support test's parameters.
+    pub image_support: ImageSupport,
+    /// The frame-free-space test's parameters.
+    pub frame_free_space: FrameFreeSpace,
+    /// The depth test's parameters.
+    pub depth: Depth,
+    /// The echo-strength test's parameters.
+    pub echo_strength: EchoStrength,
+    /// The echo-order test's parameters.
+    pub echo_order: EchoOrder,
+}
+
+/// Every built-in test's name, in the order they are weighed.
+pub const TEST_NAMES: [&str; 7] = [
+    "seen-space",
+    "seen-surface",
+    "image-support",
+    "frame-free-space",
+    "depth",
+    "echo-strength",
+    "echo-order",
+];
+
+impl Default for WeighingParams {
+    fn default() -> Self {
+        Self {
+            tests: TEST_NAMES.iter().map(|s| s.to_string()).collect(),
+            threshold: 0.5,
+            reflection_prior: 0.5,
+            edge_margin: 0.15,
+            seen_space: SeenSpace::default(),
+            seen_surface: SeenSurface::default(),
+            image_support: ImageSupport::default(),
+            frame_free_space: FrameFreeSpace::default(),
+            depth: Depth::default(),
+            echo_strength: EchoStrength::default(),
+            echo_order: EchoOrder::default(),
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! The weighing on the synthetic pane of the decision tests: each built-in
+//! test's sign, the landmark's prior, a custom test, and the threshold.
+
+use nalgebra::{Isometry3, Point3};
+
+use super::*;
+use crate::classify::boundary::BeamPlanes;
+use crate::classify::decide::tests::{frame, pane, room_space};
+use crate::classify::decide::{BeamHits, DecisionParams};
+use crate::classify::weighed::{decide_weighed, FrameContext};
+use crate::classify::{Class, Decisions};
+use crate::reflect::BoundedPlane;
+use crate::sensor::{OrganizedScan, SensorModel};
+
+/// The weighed decisions for `points` behind `planes`, with the room in
+/// front of the pane seen directly.
+fn weighed(points: &[[f32; 3]], planes: &[BoundedPlane], weighing: &Weighing) -> Decisions {
+    let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+    let f = frame(points, 10.0);
+    let scan = OrganizedScan::build(&f, &sensor).unwrap();
+    let params = DecisionParams::default();
+    let beams = BeamPlanes::hulls(planes, 0.0);
+    let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
+    let space = room_space();
+    let view = space.in_sensor_frame(Isometry3::identity());
+    let ctx = FrameContext {
+        frame: &f,
+        scan: &scan,
+        sensor: &sensor,
+        bounded: planes,
+        hits: &hits,
+        support: None,
+        space: Some(&view),
+    };
+    decide_weighed(&ctx, &params, weighing)
+}
+
+fn only(tests: &[&str]) -> Weighing {
+    Weighing::from_params(&WeighingParams {
+        tests: tests.iter().map(|s| s.to_string()).collect(),
+        ..WeighingParams::default()
+    })
+    .unwrap()
+}
+
+/// A test that calls every point a reflection, as strongly as asked.
+#[derive(Debug)]
+struct Always(f64);
+
+impl EvidenceTest for Always {
+    fn name(&self) -> &str {
+        "always"
+    }
+    fn weigh(&self, _: &BehindPoint<'_>) -> Option<f64> {
+        Some(self.0)
+    }
+}
+
+/// With no test, a point behind glass is as likely either: unclassified at
+/// confidence 0.5; behind a mirror it is a reflection, nearly certain.
+#[test]
+fn the_landmark_prior_decides_without_evidence() {
+    let point = [[5.5f32, 0.2, 0.3]];
+    let mut planes = pane();
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Unclassified]);
+    assert!((d.confidence[0] - 0.5).abs() < 1e-6);
+    planes[0].mirror_probability = 1.0;
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert_eq!(d.rules, [Rule::Prior]);
+    assert!(d.confidence[0] > 0.99, "{:?}", d.confidence);
+}
+
+/// The point's mirror image lands in the room, seen free: the seen-space
+/// test calls it real (an Obstacle, with the test's confidence), and a
+/// stronger custom test added from outside overrules it.
+#[test]
+fn tests_weigh_and_a_stronger_one_overrules() {
+    let point = [[5.5f32, 0.2, 0.3]];
+    let planes = pane();
+    let seen = only(&["seen-space"]);
+    let d = weighed(&point, &planes, &seen);
+    assert_eq!(d.classes, [Class::Obstacle]);
+    assert_eq!(d.rules, [Rule::RealRefuted]);
+    let expected = 1.0 - SeenSpace::default().error;
+    assert!((d.confidence[0] as f64 - expected).abs() < 1e-6, "{:?}", d.confidence);
+    // A custom test weighing less does not change the class ...
+    let weak = only(&["seen-space"]).with_test(Box::new(Always(1.0)));
+    assert_eq!(weighed(&point, &planes, &weak).classes, [Class::Obstacle]);
+    // ... one weighing more does, and is reported as the deciding rule.
+    let strong = only(&["seen-space"]).with_test(Box::new(Always(10.0)));
+    let d = weighed(&point, &planes, &strong);
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert_eq!(d.rules, [Rule::Weighed]);
+    assert_eq!(strong.test_names(), ["seen-space", "always"]);
+}
+
+/// A posterior short of the threshold leaves the point unclassified.
+#[test]
+fn a_posterior_short_of_the_threshold_is_unclassified() {
+    let point = [[5.5f32, 0.2, 0.3]];
+    let planes = pane();
+    let cautious = Weighing::from_params(&WeighingParams {
+        tests: vec![],
+        threshold: 0.9,
+        ..WeighingParams::default()
+    })
+    .unwrap()
+    .with_test(Box::new(Always(1.0)));
+    let d = weighed(&point, &planes, &cautious);
+    assert_eq!(d.classes, [Class::Unclassified]);
+    let sure = cautious.with_test(Box::new(Always(2.0)));
+    assert_eq!(weighed(&point, &planes, &sure).classes, [Class::Reflection]);
+}
+
+/// Unknown names and thresholds outside [0.5, 1) are refused.
+#[test]
+fn unknown_tests_and_bad_thresholds_are_refused() {
+    let err = Weighing::from_params(&WeighingParams {
+        tests: vec!["crystal-ball".into()],
+        ..WeighingParams::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("crystal-ball") && err.contains("seen-space"), "{err}");
+    assert!(Weighing::from_params(&WeighingParams {
+        threshold: 0.3,
+        ..WeighingParams::default()
+    })
+    .is_err());
+    assert_eq!(Weighing::default().test_names(), TEST_NAMES);
+}
+
+/// The depth test favours a real point deeper than the room, and the
+/// outcome weight is the log-odds of its error rate.
+#[test]
+fn depth_and_outcome_weight() {
+    assert!((outcome_weight(0.1) - 9f64.ln()).abs() < 1e-12);
+    assert_eq!(outcome_weight(0.5), 0.0);
+    let planes = pane();
+    // Nothing in front of the pane: the room is 0 m deep, the point 0.5 m.
+    let d = weighed(&[[5.5f32, 0.2, 0.3]], &planes, &only(&["depth"]));
+    assert_eq!(d.classes, [Class::Obstacle]);
+    let _ = Point3::<f64>::origin();
+}

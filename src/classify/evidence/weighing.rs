@@ -1,0 +1,134 @@
+//! The posterior of a point behind a reflective landmark: the landmark's
+//! prior and every test's log-likelihood ratio, summed.
+
+use super::{BehindPoint, EvidenceTest, WeighingParams};
+use crate::classify::rule::Rule;
+use crate::error::Error;
+
+/// Probabilities are kept this far from 0 and 1, so that evidence can
+/// always overrule a prior.
+const PRIOR_FLOOR: f64 = 1e-3;
+
+/// A point's posterior: the probability that it is a reflection, and the
+/// rule to report (the test that weighed most towards the more probable
+/// hypothesis; the landmark's prior when none did).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Posterior {
+    /// P(Reflection | evidence).
+    pub reflection: f64,
+    /// What decided it.
+    pub rule: Rule,
+}
+
+/// The tests a classifier weighs, with the prior's parameters.
+#[derive(Debug)]
+pub struct Weighing {
+    tests: Vec<Box<dyn EvidenceTest>>,
+    threshold: f64,
+    reflection_prior: f64,
+    edge_margin: f64,
+}
+
+impl Weighing {
+    /// The tests `params.tests` names, each with its parameters; an unknown
+    /// name is an error that lists the known ones.
+    pub fn from_params(params: &WeighingParams) -> Result<Self, Error> {
+        let mut tests: Vec<Box<dyn EvidenceTest>> = Vec::new();
+        for name in &params.tests {
+            tests.push(match name.as_str() {
+                "seen-space" => Box::new(params.seen_space) as Box<dyn EvidenceTest>,
+                "seen-surface" => Box::new(params.seen_surface),
+                "image-support" => Box::new(params.image_support),
+                "frame-free-space" => Box::new(params.frame_free_space),
+                "depth" => Box::new(params.depth),
+                "echo-strength" => Box::new(params.echo_strength),
+                "echo-order" => Box::new(params.echo_order),
+                other => {
+                    return Err(Error::Config(format!(
+                        "plane_map.weighing.tests: unknown evidence test {other:?} (known: {})",
+                        super::params::TEST_NAMES.join(", ")
+                    )))
+                }
+            });
+        }
+        if !(params.threshold >= 0.5 && params.threshold < 1.0) {
+            return Err(Error::Config(format!(
+                "plane_map.weighing.threshold must be in [0.5, 1), got {}",
+                params.threshold
+            )));
+        }
+        if !(params.reflection_prior > 0.0 && params.reflection_prior < 1.0) {
+            return Err(Error::Config(format!(
+                "plane_map.weighing.reflection_prior must be in (0, 1), got {}",
+                params.reflection_prior
+            )));
+        }
+        Ok(Self {
+            tests,
+            threshold: params.threshold,
+            reflection_prior: params.reflection_prior,
+            edge_margin: params.edge_margin,
+        })
+    }
+
+    /// These tests and one more, weighed after them.
+    pub fn with_test(mut self, test: Box<dyn EvidenceTest>) -> Self {
+        self.tests.push(test);
+        self
+    }
+
+    /// The names of the tests weighed, in order.
+    pub fn test_names(&self) -> Vec<&str> {
+        self.tests.iter().map(|t| t.name()).collect()
+    }
+
+    /// The posterior a class needs.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// The probability that `point` is a reflection before any test: its
+    /// landmark a mirror (then it is one), or glass (then the prior).
+    pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
+        let beside = !point
+            .landmark
+            .bounds(&point.crossing_point(), -self.edge_margin);
+        let mirror = if beside || !point.single_pane {
+            0.0
+        } else {
+            point.landmark.mirror_probability
+        };
+        (mirror + (1.0 - mirror) * self.reflection_prior).clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
+    }
+
+    /// The posterior of `point`.
+    pub fn weigh(&self, point: &BehindPoint<'_>) -> Posterior {
+        let prior = self.prior(point);
+        let mut log_odds = (prior / (1.0 - prior)).ln();
+        let (mut best_for, mut best_against) = ((0.0, Rule::Undecided), (0.0, Rule::Undecided));
+        for test in &self.tests {
+            let Some(llr) = test.weigh(point).filter(|l| l.is_finite()) else {
+                continue;
+            };
+            log_odds += llr;
+            if llr > best_for.0 {
+                best_for = (llr, test.rule());
+            } else if -llr > best_against.0 {
+                best_against = (-llr, test.rule());
+            }
+        }
+        let reflection = 1.0 / (1.0 + (-log_odds).exp());
+        let rule = match (reflection > 0.5, best_for.1, best_against.1) {
+            (true, Rule::Undecided, _) | (false, _, Rule::Undecided) => Rule::Prior,
+            (true, rule, _) | (false, _, rule) => rule,
+        };
+        Posterior { reflection, rule }
+    }
+}
+
+/// The default tests with their default parameters.
+impl Default for Weighing {
+    fn default() -> Self {
+        Self::from_params(&WeighingParams::default()).expect("the defaults are valid")
+    }
+}

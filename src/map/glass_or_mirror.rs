@@ -1,0 +1,258 @@
+//! Glass or mirror, per landmark, as a probability from all of its echoes
+//! over the sequence, and the split of its echoes into reflected and
+//! transmitted ones ([`EchoSplit`]).
+//!
+//! Two observations, each weighed as a binomial count against what a
+//! mirror predicts (a glass landmark may show any share):
+//! - **transmissions confirmed by space seen directly**: points behind it
+//!   whose mirror image the seen space refutes are real, seen through it. A
+//!   mirror transmits nothing: only pose and plane errors give such points,
+//!   at a rate of `false_transmission_rate`.
+//! - **weak echoes**: glass reflects a few per cent (`R²` about 0.01 of the
+//!   power), so its reflections come back a decade or more weaker than
+//!   direct echoes from the same surfaces; a mirror reflects most of the
+//!   light (`R² > 0.6`), and its images are as strong as the room. The share
+//!   of echoes behind it weaker than the room's typical direct echo by
+//!   `weak_decades` is, behind a mirror, the share of the room's direct
+//!   echoes that weak.
+//!
+//! Points of one landmark are not independent (one pose error moves them
+//! all): each count weighs as `effective_views` observations at most.
+
+use serde::{Deserialize, Serialize};
+
+use crate::reflect::{EchoHistogram, EchoSplit, EchoSplitParams};
+
+/// Parameters of the glass-or-mirror estimate (`[plane_map.mirror]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MirrorParams {
+    /// Probability that a reflective landmark is a mirror before its
+    /// evidence.
+    pub prior: f64,
+    /// Share of the points behind a mirror that the seen space calls real
+    /// all the same (pose and plane errors, beams passing its edge).
+    pub false_transmission_rate: f64,
+    /// Independent observations a landmark's counts weigh as at most.
+    pub effective_views: f64,
+    /// A glass reflection is at least this much weaker than a direct echo
+    /// from the same surface, decades (`R²` of 0.1 or less).
+    pub weak_decades: f64,
+}
+
+impl Default for MirrorParams {
+    fn default() -> Self {
+        Self {
+            prior: 0.3,
+            false_transmission_rate: 0.005,
+            effective_views: 50.0,
+            weak_decades: 1.0,
+        }
+    }
+}
+
+/// The echoes behind one landmark over the keyframes (integer counts: the
+/// sum does not depend on the order or the threads).
+#[derive(Debug, Clone, Default)]
+pub struct BehindEchoes {
+    /// The strengths of every point behind it (its echo split).
+    pub all: EchoHistogram,
+    /// ... of those transmitted for sure (the split's orientation).
+    pub anchors: EchoHistogram,
+    /// ... of those whose beam crossed it well inside its extent.
+    pub inside: EchoHistogram,
+    /// Points of `inside` that the seen space calls real where measured.
+    pub transmitted_inside: u64,
+}
+
+impl BehindEchoes {
+    /// Add another frame's counts.
+    pub fn merge(&mut self, other: &Self) {
+        self.all.merge(&other.all);
+        self.anchors.merge(&other.anchors);
+        self.inside.merge(&other.inside);
+        self.transmitted_inside += other.transmitted_inside;
+    }
+}
+
+/// What the sequence says about one landmark.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlassOrMirror {
+    /// Its echoes' split into reflected and transmitted, when they fall in
+    /// two groups.
+    pub echo_split: Option<EchoSplit>,
+    /// P(mirror | its echoes).
+    pub mirror_probability: f64,
+    /// The log-likelihood ratio (mirror against glass) of the confirmed
+    /// transmissions.
+    pub transmission_llr: f64,
+    /// ... of the weak echoes.
+    pub weak_echo_llr: f64,
+}
+
+/// The estimate for a landmark with echoes `behind`, given the strengths of
+/// the sequence's direct echoes `direct` and the range exponent the
+/// strengths use.
+pub fn glass_or_mirror(
+    behind: &BehindEchoes,
+    direct: &EchoHistogram,
+    split: &EchoSplitParams,
+    p: &MirrorParams,
+    range_exponent: f64,
+) -> GlassOrMirror {
+    let echo_split = EchoSplit::fit(&behind.all, &behind.anchors, split, range_exponent);
+    let n = behind.inside.total();
+    let transmission_llr = binomial_llr(
+        behind.transmitted_inside as f64,
+        n as f64,
+        p.false_transmission_rate,
+        p.effective_views,
+    );
+    let weak_echo_llr = match direct.quantile(0.5) {
+        Some(typical) if direct.total() > 0 => {
+            let threshold = typical - p.weak_decades;
+            let weak = behind.inside.below(threshold) as f64;
+            let expected = direct.share_below(threshold).max(1e-3);
+            binomial_llr(weak, n as f64, expected, p.effective_views)
+        }
+        _ => 0.0,
+    };
+    let prior = p.prior.clamp(1e-3, 1.0 - 1e-3);
+    let log_odds = (prior / (1.0 - prior)).ln() + transmission_llr + weak_echo_llr;
+    GlassOrMirror {
+        echo_split,
+        mirror_probability: 1.0 / (1.0 + (-log_odds).exp()),
+        transmission_llr,
+        weak_echo_llr,
+    }
+}
+
+/// `ln P(k of n | rate q) / P(k of n | any rate)`, the counts scaled down to
+/// at most `views` observations: positive where `k / n` is what rate `q`
+/// predicts, negative where it is far above it. Under "any rate" (uniform)
+/// every count has probability `1 / (n + 1)`.
+pub fn binomial_llr(k: f64, n: f64, q: f64, views: f64) -> f64 {
+    if !(n > 0.0) {
+        return 0.0;
+    }
+    let scale = (views / n).min(1.0);
+    let (k, n) = (k * scale, n * scale);
+    let q = q.clamp(1e-6, 1.0 - 1e-6);
+    ln_choose(n, k) + k * q.ln() + (n - k) * (1.0 - q).ln() + (n + 1.0).ln()
+}
+
+/// `ln C(n, k)` for real `n >= k >= 0`.
+fn ln_choose(n: f64, k: f64) -> f64 {
+    ln_gamma(n + 1.0) - ln_gamma(k + 1.0) - ln_gamma(n - k + 1.0)
+}
+
+/// `ln Γ(x)` for `x > 0` (Lanczos, g = 7; relative error below 1e-13).
+pub fn ln_gamma(x: f64) -> f64 {
+    const G: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    if x < 0.5 {
+        let pi = std::f64::consts::PI;
+        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let mut a = G[0];
+    let t = x + 7.5;
+    for (i, g) in G.iter().enumerate().skip(1) {
+        a += g / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn histogram(values: impl IntoIterator<Item = f64>) -> EchoHistogram {
+        let mut h = EchoHistogram::default();
+        for v in values {
+            h.add(v);
+        }
+        h
+    }
+
+    proptest! {
+        /// ln Γ satisfies Γ(x + 1) = x Γ(x).
+        #[test]
+        fn ln_gamma_recurrence(x in 0.01f64..200.0) {
+            let lhs = ln_gamma(x + 1.0);
+            let rhs = x.ln() + ln_gamma(x);
+            prop_assert!((lhs - rhs).abs() < 1e-9 * (1.0 + lhs.abs()), "{lhs} {rhs}");
+        }
+    }
+
+    #[test]
+    fn ln_gamma_of_integers_is_ln_factorial() {
+        let mut f = 1.0f64;
+        for n in 1..20 {
+            f *= n as f64;
+            assert!((ln_gamma(n as f64 + 1.0) - f.ln()).abs() < 1e-10);
+        }
+    }
+
+    /// A count at the mirror's rate favours the mirror, one far above it
+    /// favours glass, and more views weigh more, up to the cap.
+    #[test]
+    fn binomial_counts_weigh_towards_the_rate_they_fit() {
+        assert!(binomial_llr(0.0, 1000.0, 0.005, 50.0) > 2.0);
+        assert!(binomial_llr(300.0, 1000.0, 0.005, 50.0) < -20.0);
+        assert!(binomial_llr(0.0, 20.0, 0.005, 50.0) < binomial_llr(0.0, 40.0, 0.005, 50.0));
+        assert_eq!(
+            binomial_llr(0.0, 1e6, 0.005, 50.0),
+            binomial_llr(0.0, 50.0, 0.005, 50.0)
+        );
+        assert_eq!(binomial_llr(0.0, 0.0, 0.005, 50.0), 0.0);
+    }
+
+    /// Behind a mirror the echoes are as strong as the room and none are
+    /// confirmed transmitted: a mirror. Behind glass many are a decade
+    /// weaker, or many are confirmed transmitted: glass.
+    #[test]
+    fn mirrors_and_glass_are_told_apart_by_their_echoes() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        let room: Vec<f64> = (0..4000).map(|_| 3.0 + 0.8 * rng.unit()).collect();
+        let direct = histogram(room.iter().copied());
+        let split = EchoSplitParams::default();
+        let p = MirrorParams::default();
+        let mirror_like = histogram(room.iter().map(|s| s - 0.1));
+        let mirror = BehindEchoes {
+            all: mirror_like.clone(),
+            inside: mirror_like,
+            ..BehindEchoes::default()
+        };
+        let m = glass_or_mirror(&mirror, &direct, &split, &p, 2.0);
+        assert!(m.mirror_probability > 0.9, "{m:?}");
+        let glass_like = histogram(
+            room.iter()
+                .enumerate()
+                .map(|(i, s)| if i % 2 == 0 { s - 2.0 } else { s - 0.1 }),
+        );
+        let glass = BehindEchoes {
+            all: glass_like.clone(),
+            inside: glass_like,
+            ..BehindEchoes::default()
+        };
+        let g = glass_or_mirror(&glass, &direct, &split, &p, 2.0);
+        assert!(g.mirror_probability < 0.1, "{g:?}");
+        let seen_through = BehindEchoes {
+            transmitted_inside: 400,
+            ..mirror
+        };
+        let t = glass_or_mirror(&seen_through, &direct, &split, &p, 2.0);
+        assert!(t.mirror_probability < 0.1, "{t:?}");
+    }
+}
