@@ -218,6 +218,26 @@ impl EchoHistogram {
         Some(centre(BINS - 1))
     }
 
+    /// The standard deviation of the strengths on one side of `threshold`
+    /// (below it, or above it), decades; 0 when that side is empty.
+    pub fn spread(&self, threshold: f64, below: bool) -> f64 {
+        let (mut n, mut sum, mut sq) = (0.0, 0.0, 0.0);
+        for (b, &c) in self.counts.iter().enumerate() {
+            let x = centre(b);
+            if (x < threshold) == below && c > 0 {
+                let c = c as f64;
+                n += c;
+                sum += c * x;
+                sq += c * x * x;
+            }
+        }
+        if n == 0.0 {
+            return 0.0;
+        }
+        let mean = sum / n;
+        (sq / n - mean * mean).max(0.0).sqrt()
+    }
+
     /// Echoes counted above `threshold`.
     fn above(&self, threshold: f64) -> u64 {
         self.counts
@@ -293,6 +313,10 @@ pub struct EchoSplit {
     pub weak_mean: f64,
     /// Mean strength of the stronger group, decades.
     pub strong_mean: f64,
+    /// Standard deviation of the weaker group, decades.
+    pub weak_spread: f64,
+    /// Standard deviation of the stronger group, decades.
+    pub strong_spread: f64,
 }
 
 impl EchoSplit {
@@ -337,6 +361,8 @@ impl EchoSplit {
             weak_is_reflection,
             weak_mean: m0.min(m1),
             strong_mean: m0.max(m1),
+            weak_spread: all.spread(threshold, true),
+            strong_spread: all.spread(threshold, false),
         })
     }
 

@@ -21,7 +21,7 @@ pub struct Depth {
 impl Default for Depth {
     fn default() -> Self {
         Self {
-            error: 0.1,
+            error: 0.01,
             margin: 0.1,
         }
     }

@@ -9,24 +9,30 @@ use crate::reflect::echo_split::echo_strength;
 /// A reflection off glass comes back scaled by `R²`, a transmitted echo by
 /// `T²`: where the echoes behind a landmark fall in two groups
 /// ([`EchoSplit`](crate::reflect::EchoSplit)), a point's strength is weighed
-/// as a Gaussian in each group (log-strength, decades).
+/// as a Gaussian in each group (log-strength, decades, with the group's own
+/// mean and spread): groups that overlap weigh little.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct EchoStrength {
-    /// Spread of the echo strengths within one group, decades: surface
-    /// albedo (0.1-0.9 is a decade) and incidence.
-    pub spread: f64,
-    /// Probability that an echo falls on the other group's side whatever its
-    /// distance from the threshold (a dark object behind glass, a bright
-    /// one reflected): caps the weight.
-    pub error: f64,
+    /// The least spread of the echo strengths within one group, decades:
+    /// the histogram's resolution and the range noise, where a group's own
+    /// spread is narrower.
+    pub min_spread: f64,
+    /// Probability that a real echo falls deep in the reflected group (a
+    /// dark or distant object behind glass): caps the weight towards a
+    /// reflection.
+    pub weak_error: f64,
+    /// Probability that a reflection falls deep in the transmitted group (a
+    /// bright surface reflected): caps the weight towards real.
+    pub strong_error: f64,
 }
 
 impl Default for EchoStrength {
     fn default() -> Self {
         Self {
-            spread: 0.3,
-            error: 0.05,
+            min_spread: 0.1,
+            weak_error: 0.2,
+            strong_error: 0.02,
         }
     }
 }
@@ -48,14 +54,22 @@ impl EvidenceTest for EchoStrength {
             1.0
         };
         let s = echo_strength(point.intensity(), point.range, split.range_exponent, cos);
+        let weak = (split.weak_mean, split.weak_spread.max(self.min_spread));
+        let strong = (split.strong_mean, split.strong_spread.max(self.min_spread));
         let (reflected, transmitted) = if split.weak_is_reflection {
-            (split.weak_mean, split.strong_mean)
+            (weak, strong)
         } else {
-            (split.strong_mean, split.weak_mean)
+            (strong, weak)
         };
-        let var = 2.0 * self.spread * self.spread;
-        let llr = ((s - transmitted).powi(2) - (s - reflected).powi(2)) / var;
-        let cap = outcome_weight(self.error);
-        Some(llr.clamp(-cap, cap))
+        let llr = log_gauss(s, reflected) - log_gauss(s, transmitted);
+        Some(llr.clamp(
+            -outcome_weight(self.strong_error),
+            outcome_weight(self.weak_error),
+        ))
     }
+}
+
+/// `ln N(x; mean, sd)` up to the constant both groups share.
+fn log_gauss(x: f64, (mean, sd): (f64, f64)) -> f64 {
+    -0.5 * ((x - mean) / sd).powi(2) - sd.ln()
 }

@@ -26,7 +26,7 @@ pub struct FrameFreeSpace {
 impl Default for FrameFreeSpace {
     fn default() -> Self {
         Self {
-            error: 0.05,
+            error: 0.03,
             margin: 0.1,
             margin_ratio: 0.01,
         }

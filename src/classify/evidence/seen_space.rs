@@ -35,7 +35,7 @@ pub struct SeenSpace {
 impl Default for SeenSpace {
     fn default() -> Self {
         Self {
-            error: 0.05,
+            error: 0.02,
             margin: 0.2,
             clearance_ratio: 0.02,
             support_radius: 0.316,

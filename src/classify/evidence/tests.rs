@@ -129,7 +129,7 @@ fn unknown_tests_and_bad_thresholds_are_refused() {
         ..WeighingParams::default()
     })
     .is_err());
-    assert_eq!(Weighing::default().test_names(), TEST_NAMES);
+    assert_eq!(Weighing::default().test_names(), DEFAULT_TESTS);
 }
 
 /// The depth test favours a real point deeper than the room, and the

@@ -213,6 +213,8 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
         weak_is_reflection: true,
         weak_mean: 1.8,
         strong_mean: 3.8,
+        weak_spread: 0.3,
+        strong_spread: 0.3,
     });
     assert_eq!(
         classify(&points, 1.0, &planes, &params),
@@ -377,6 +379,8 @@ fn split() -> crate::reflect::EchoSplit {
         weak_is_reflection: true,
         weak_mean: 1.8,
         strong_mean: 3.8,
+        weak_spread: 0.3,
+        strong_spread: 0.3,
     }
 }
 
