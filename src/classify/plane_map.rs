@@ -8,8 +8,8 @@ use super::boundary::BeamPlanes;
 use super::decide::{decide_with_hits, BeamHits, DecisionParams, SurfaceSupport};
 use super::evidence::{Weighing, WeighingParams};
 use super::weighed::{decide_weighed, FrameContext};
-use crate::map::MirrorParams;
 use super::{Classifier, Decisions, FrameInput};
+use crate::map::MirrorParams;
 use crate::reflect::{planes_seen_from, BoundedPlane, EchoSplitParams};
 
 /// How points behind a reflective plane are decided.

@@ -105,8 +105,12 @@ pub fn decide_weighed(
             (Class::Reflection, p)
         } else if 1.0 - p > threshold {
             let real = if !past_extent
-                && through_glass(landmark, &position, crossing, params.seen_surface_echo_reach)
-            {
+                && through_glass(
+                    landmark,
+                    &position,
+                    crossing,
+                    params.seen_surface_echo_reach,
+                ) {
                 Class::Obstacle
             } else {
                 Class::Normal

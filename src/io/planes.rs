@@ -58,6 +58,10 @@ pub struct PlaneRecord {
     /// Separate panes (boundaries) on this plane, when known.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub panes: Vec<Vec<[f64; 3]>>,
+    /// The probability that a reflective landmark is a mirror rather than
+    /// glass, from its echoes over the sequence, when estimated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mirror_probability: Option<f64>,
 }
 
 /// Write `planes.json` (atomically, pretty-printed).

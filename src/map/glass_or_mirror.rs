@@ -236,11 +236,12 @@ mod tests {
         };
         let m = glass_or_mirror(&mirror, &direct, &split, &p, 2.0);
         assert!(m.mirror_probability > 0.9, "{m:?}");
-        let glass_like = histogram(
-            room.iter()
-                .enumerate()
-                .map(|(i, s)| if i % 2 == 0 { s - 2.0 } else { s - 0.1 }),
-        );
+        let glass_like =
+            histogram(
+                room.iter()
+                    .enumerate()
+                    .map(|(i, s)| if i % 2 == 0 { s - 2.0 } else { s - 0.1 }),
+            );
         let glass = BehindEchoes {
             all: glass_like.clone(),
             inside: glass_like,

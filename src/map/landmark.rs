@@ -145,6 +145,7 @@ impl Landmark {
                 .as_ref()
                 .map(|ps| ps.iter().map(to_3d).collect())
                 .unwrap_or_default(),
+            mirror_probability: b.mirror_probability,
         }
     }
 }

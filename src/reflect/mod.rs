@@ -45,15 +45,14 @@ pub struct BoundedPlane {
     pub echo_split: Option<EchoSplit>,
     /// The probability that the plane is a mirror (nothing behind it is
     /// real) rather than glass, from all of its evidence over the sequence
-    /// ([`glass_or_mirror`](crate::map::glass_or_mirror)); 0 where not
-    /// estimated.
-    pub mirror_probability: f64,
+    /// ([`glass_or_mirror`](crate::map::glass_or_mirror)), when estimated.
+    pub mirror_probability: Option<f64>,
 }
 
 impl BoundedPlane {
     /// Whether the plane is more likely a mirror than glass.
     pub fn is_mirror(&self) -> bool {
-        self.mirror_probability > 0.5
+        self.mirror_probability.is_some_and(|p| p > 0.5)
     }
 
     /// Bound `plane` by the hull of `points` projected into its chart.
@@ -67,7 +66,7 @@ impl BoundedPlane {
             evidence: None,
             panes: None,
             echo_split: None,
-            mirror_probability: 0.0,
+            mirror_probability: None,
         }
     }
 

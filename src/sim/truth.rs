@@ -155,6 +155,7 @@ impl TruePlanes {
                     first_frame: first.map(&frame_name),
                     last_frame: last.map(&frame_name),
                     panes,
+                    mirror_probability: None,
                 }
             })
             .collect()

@@ -49,7 +49,10 @@ impl EvidenceTest for EchoStrength {
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let split = point.landmark.echo_split.filter(|_| point.single_pane)?;
         let cos = if split.incidence_correction {
-            point.scan.incidence_cos(point.frame, point.index).unwrap_or(1.0)
+            point
+                .scan
+                .incidence_cos(point.frame, point.index)
+                .unwrap_or(1.0)
         } else {
             1.0
         };

@@ -45,7 +45,6 @@ impl EvidenceTest for FrameFreeSpace {
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let (_, far) = returns_along(point.scan, point.sensor, point.frame, &point.mirrored, 1)?;
         let range = point.mirrored.coords.norm();
-        (far > range + self.margin + self.margin_ratio * range)
-            .then(|| -outcome_weight(self.error))
+        (far > range + self.margin + self.margin_ratio * range).then(|| -outcome_weight(self.error))
     }
 }

@@ -51,7 +51,11 @@ impl EvidenceTest for ImageSupport {
         let image_range = point.mirrored.coords.norm();
         let on_beam = returns_along(point.scan, point.sensor, point.frame, &point.mirrored, 1)
             .is_some_and(|(closest, _)| (closest - image_range).abs() <= self.range_tolerance);
-        let nearby = || point.support.is_some_and(|s| s.near(&point.mirrored, self.radius));
+        let nearby = || {
+            point
+                .support
+                .is_some_and(|s| s.near(&point.mirrored, self.radius))
+        };
         (on_beam || nearby()).then(|| outcome_weight(self.error))
     }
 }

@@ -65,7 +65,7 @@ fn the_landmark_prior_decides_without_evidence() {
     let d = weighed(&point, &planes, &only(&[]));
     assert_eq!(d.classes, [Class::Unclassified]);
     assert!((d.confidence[0] - 0.5).abs() < 1e-6);
-    planes[0].mirror_probability = 1.0;
+    planes[0].mirror_probability = Some(1.0);
     let d = weighed(&point, &planes, &only(&[]));
     assert_eq!(d.classes, [Class::Reflection]);
     assert_eq!(d.rules, [Rule::Prior]);
@@ -84,7 +84,11 @@ fn tests_weigh_and_a_stronger_one_overrules() {
     assert_eq!(d.classes, [Class::Obstacle]);
     assert_eq!(d.rules, [Rule::RealRefuted]);
     let expected = 1.0 - SeenSpace::default().error;
-    assert!((d.confidence[0] as f64 - expected).abs() < 1e-6, "{:?}", d.confidence);
+    assert!(
+        (d.confidence[0] as f64 - expected).abs() < 1e-6,
+        "{:?}",
+        d.confidence
+    );
     // A custom test weighing less does not change the class ...
     let weak = only(&["seen-space"]).with_test(Box::new(Always(1.0)));
     assert_eq!(weighed(&point, &planes, &weak).classes, [Class::Obstacle]);
@@ -123,7 +127,10 @@ fn unknown_tests_and_bad_thresholds_are_refused() {
     })
     .unwrap_err()
     .to_string();
-    assert!(err.contains("crystal-ball") && err.contains("seen-space"), "{err}");
+    assert!(
+        err.contains("crystal-ball") && err.contains("seen-space"),
+        "{err}"
+    );
     assert!(Weighing::from_params(&WeighingParams {
         threshold: 0.3,
         ..WeighingParams::default()

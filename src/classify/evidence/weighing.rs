@@ -96,7 +96,7 @@ impl Weighing {
         let mirror = if beside || !point.single_pane {
             0.0
         } else {
-            point.landmark.mirror_probability
+            point.landmark.mirror_probability.unwrap_or(0.0)
         };
         (mirror + (1.0 - mirror) * self.reflection_prior).clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
     }

@@ -119,11 +119,11 @@ impl<'a> FrameViews<'a> {
                 .map(|(estimate, bp)| BoundedPlane {
                     echo_split: estimate.echo_split,
                     // Nobody walks through a mirror.
-                    mirror_probability: if crossings_open && passed_through(bp, &path) {
+                    mirror_probability: Some(if crossings_open && passed_through(bp, &path) {
                         0.0
                     } else {
                         estimate.mirror_probability
-                    },
+                    }),
                     ..bp.clone()
                 })
                 .collect(),

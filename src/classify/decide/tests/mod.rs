@@ -178,7 +178,7 @@ fn a_point_in_space_seen_free_is_a_reflection() {
 #[test]
 fn a_point_seen_past_a_mirrors_edge_is_normal() {
     let mut planes = pane();
-    planes[0].mirror_probability = 1.0;
+    planes[0].mirror_probability = Some(1.0);
     // The pane ends at y = 2: the first beam crosses it at y = 1.93, the
     // second at y = 0.18.
     let points = [[5.5f32, 2.123, 0.3], [5.5, 0.2, 0.3]];
@@ -345,7 +345,7 @@ fn behind_a_mirror_nothing_is_real() {
         classify(&points, 50.0, &planes, &rule_only(true)),
         [Class::Obstacle]
     );
-    planes[0].mirror_probability = 1.0;
+    planes[0].mirror_probability = Some(1.0);
     assert_eq!(
         classify(&points, 50.0, &planes, &rule_only(true)),
         [Class::Reflection]
@@ -407,11 +407,11 @@ fn past_a_second_pane_the_echo_strength_decides_pane_by_pane() {
     );
     assert_eq!(classify(&points, 1.0, &planes, &off), [Class::Unclassified]);
     // Through the first pane into a mirror: nothing behind it is real.
-    planes[1].mirror_probability = 1.0;
+    planes[1].mirror_probability = Some(1.0);
     planes[1].echo_split = None;
     assert_eq!(classify(&points, 100.0, &planes, &on), [Class::Reflection]);
     // A second pane without a split leaves a strong echo to other tests.
-    planes[1].mirror_probability = 0.0;
+    planes[1].mirror_probability = Some(0.0);
     assert_eq!(
         classify(&points, 100.0, &planes, &on),
         [Class::Unclassified]
