@@ -38,6 +38,12 @@ pub struct MirrorParams {
     /// A glass reflection is at least this much weaker than a direct echo
     /// from the same surface, decades (`R²` of 0.1 or less).
     pub weak_decades: f64,
+    /// A reflection off plain glass is this much weaker than a direct echo
+    /// from the same surface, decades (`R²` of 0.01-0.1 at the incidences
+    /// glass echoes at): where the echoes behind a landmark do not fall in
+    /// two groups (all transmitted, or all reflected), its split is this
+    /// physics around the room's direct echoes.
+    pub glass_reflection_decades: f64,
 }
 
 impl Default for MirrorParams {
@@ -47,6 +53,7 @@ impl Default for MirrorParams {
             false_transmission_rate: 0.005,
             effective_views: 50.0,
             weak_decades: 1.0,
+            glass_reflection_decades: 1.5,
         }
     }
 }
@@ -100,7 +107,8 @@ pub fn glass_or_mirror(
     p: &MirrorParams,
     range_exponent: f64,
 ) -> GlassOrMirror {
-    let echo_split = EchoSplit::fit(&behind.all, &behind.anchors, split, range_exponent);
+    let echo_split = EchoSplit::fit(&behind.all, &behind.anchors, split, range_exponent)
+        .or_else(|| physical_split(direct, split, p, range_exponent));
     let n = behind.inside.total();
     let transmission_llr = binomial_llr(
         behind.transmitted_inside as f64,
@@ -126,6 +134,40 @@ pub fn glass_or_mirror(
         weak_echo_llr,
     }
 }
+
+/// The split physics predicts around the room's direct echoes `direct`:
+/// transmitted echoes as strong as direct ones (`T²` near 1), reflections
+/// `glass_reflection_decades` weaker, both with the direct echoes' spread.
+/// `None` with fewer than [`MIN_DIRECT`] direct echoes.
+fn physical_split(
+    direct: &EchoHistogram,
+    split: &EchoSplitParams,
+    p: &MirrorParams,
+    range_exponent: f64,
+) -> Option<EchoSplit> {
+    if direct.total() < MIN_DIRECT {
+        return None;
+    }
+    let typical = direct.quantile(0.5)?;
+    let spread = direct.spread(f64::INFINITY, true);
+    let weak_mean = typical - p.glass_reflection_decades;
+
+    Some(EchoSplit {
+        threshold: 0.5 * (weak_mean + typical),
+        band: split.band,
+        range_exponent,
+        incidence_correction: split.incidence_correction,
+        weak_is_reflection: true,
+        weak_mean,
+        strong_mean: typical,
+        weak_spread: spread,
+        strong_spread: spread,
+        from_physics: true,
+    })
+}
+
+/// Direct echoes needed to know the room's echo strengths.
+const MIN_DIRECT: u64 = 1000;
 
 /// `ln P(k of n | rate q) / P(k of n | any rate)`, the counts scaled down to
 /// at most `views` observations: positive where `k / n` is what rate `q`

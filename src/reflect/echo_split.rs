@@ -317,6 +317,11 @@ pub struct EchoSplit {
     pub weak_spread: f64,
     /// Standard deviation of the stronger group, decades.
     pub strong_spread: f64,
+    /// Whether the groups are physics around the room's direct echoes, not
+    /// fitted to this landmark's echoes: then only a weak echo is evidence
+    /// (a strong one may be a transmission, or a reflection off coated
+    /// glass, whose `R` is close to its `T`).
+    pub from_physics: bool,
 }
 
 impl EchoSplit {
@@ -363,6 +368,7 @@ impl EchoSplit {
             strong_mean: m0.max(m1),
             weak_spread: all.spread(threshold, true),
             strong_spread: all.spread(threshold, false),
+            from_physics: false,
         })
     }
 

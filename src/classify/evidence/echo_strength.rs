@@ -25,6 +25,11 @@ pub struct EchoStrength {
     /// Probability that a reflection falls deep in the transmitted group (a
     /// bright surface reflected): caps the weight towards real.
     pub strong_error: f64,
+    /// Where the echoes behind a landmark show one group and its split is
+    /// physics ([`EchoSplit::from_physics`](crate::reflect::EchoSplit)):
+    /// probability that a strong echo is a reflection all the same (coated
+    /// glass, whose `R` is close to its `T`); caps the weight towards real.
+    pub one_group_error: f64,
 }
 
 impl Default for EchoStrength {
@@ -33,6 +38,7 @@ impl Default for EchoStrength {
             min_spread: 0.1,
             weak_error: 0.2,
             strong_error: 0.02,
+            one_group_error: 0.25,
         }
     }
 }
@@ -64,7 +70,13 @@ impl EvidenceTest for EchoStrength {
         } else {
             (strong, weak)
         };
-        let llr = log_gauss(s, reflected) - log_gauss(s, transmitted);
+        // Behind a mirror the images are as strong as the room: the
+        // strengths tell glass's reflections from its transmissions only.
+        let glass = 1.0 - point.landmark.mirror_probability.unwrap_or(0.0);
+        let mut llr = glass * (log_gauss(s, reflected) - log_gauss(s, transmitted));
+        if split.from_physics {
+            llr = llr.max(-outcome_weight(self.one_group_error));
+        }
         Some(llr.clamp(
             -outcome_weight(self.strong_error),
             outcome_weight(self.weak_error),

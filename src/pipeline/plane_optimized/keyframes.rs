@@ -438,6 +438,8 @@ impl<'a> FrameViews<'a> {
                 let estimate = glass_or_mirror(&t, &direct, &p.echo_split, &p.mirror, exponent);
                 tracing::debug!(
                     plane = j,
+                    behind_median = t.all.quantile(0.5),
+                    direct_median = direct.quantile(0.5),
                     behind = t.all.total(),
                     anchors = t.anchors.total(),
                     inside = t.inside.total(),

@@ -215,6 +215,7 @@ fn the_echo_split_tells_weak_reflections_from_strong_transmissions() {
         strong_mean: 3.8,
         weak_spread: 0.3,
         strong_spread: 0.3,
+        from_physics: false,
     });
     assert_eq!(
         classify(&points, 1.0, &planes, &params),
@@ -381,6 +382,7 @@ fn split() -> crate::reflect::EchoSplit {
         strong_mean: 3.8,
         weak_spread: 0.3,
         strong_spread: 0.3,
+        from_physics: false,
     }
 }
 
