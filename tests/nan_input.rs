@@ -71,19 +71,24 @@ fn detect(input: &[&str], out: &Path) -> Output {
 }
 
 /// Every coordinate of a map PLY written by specular (binary: `float x y
-/// z`, then five `uchar`s) is finite; returns the vertex count.
+/// z`, five `uchar`s, `float confidence`) is finite, and every confidence a
+/// probability; returns the vertex count.
 fn assert_finite_map(path: &Path) -> usize {
+    const RECORD: usize = 21;
     let ply = std::fs::read(path).unwrap();
     let end = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
     let body = &ply[end..];
-    assert_eq!(body.len() % 17, 0, "{}", path.display());
-    for rec in body.chunks_exact(17) {
+    assert_eq!(body.len() % RECORD, 0, "{}", path.display());
+    let float = |rec: &[u8], at: usize| f32::from_le_bytes(rec[at..at + 4].try_into().unwrap());
+    for rec in body.chunks_exact(RECORD) {
         for k in 0..3 {
-            let c = f32::from_le_bytes(rec[4 * k..4 * k + 4].try_into().unwrap());
+            let c = float(rec, 4 * k);
             assert!(c.is_finite(), "{}: coordinate {c}", path.display());
         }
+        let p = float(rec, 17);
+        assert!((0.0..=1.0).contains(&p), "{}: confidence {p}", path.display());
     }
-    body.len() / 17
+    body.len() / RECORD
 }
 
 fn dropped_in_metrics(dir: &Path) -> u64 {

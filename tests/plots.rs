@@ -182,6 +182,7 @@ fn the_top_view_is_a_slice_above_the_floor() {
         let layer = Layer::Points {
             class,
             mirrored: false,
+            confidence: 1.0,
         };
         let want = pts.iter().filter(|p| p.class == class && inside(p)).count();
         assert_eq!(drawn.panel.count(layer), want, "{class:?}");

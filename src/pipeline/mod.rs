@@ -25,7 +25,7 @@ use nalgebra::Isometry3;
 
 use crate::classify::{Class, Rule, RuleTally};
 use crate::cloud::{Frame, SetAside};
-use crate::eval::Confusion;
+use crate::eval::{Confusion, Reliability};
 use crate::reflect::BoundedPlane;
 use crate::Result;
 
@@ -67,6 +67,17 @@ impl FrameOutput {
         let ids: Vec<u8> = self.rules.iter().map(|r| r.id()).collect();
         self.set_aside.scatter(&ids, Rule::Undecided.id())
     }
+
+    /// The confidence of every input point's class, in input order (0 at
+    /// each point set aside, whose class is unclassified). What a `.prob`
+    /// file holds; empty when the method does not say
+    /// ([`confidence`](Self::confidence) is empty).
+    pub fn input_confidence(&self) -> Vec<f32> {
+        if self.confidence.is_empty() {
+            return Vec::new();
+        }
+        self.set_aside.scatter(&self.confidence, 0.0)
+    }
 }
 
 /// A method's result over a sequence.
@@ -78,6 +89,9 @@ pub struct RunOutput {
     /// Confusion counts against the labels (`None` when a frame carries
     /// no labels).
     pub confusion: Option<Confusion>,
+    /// The calibration of the confidences against the labels (`None` when
+    /// a frame carries no labels, or no frame says a confidence).
+    pub reliability: Option<Reliability>,
     /// Points by the rule that decided them, their prediction and their
     /// label (label 0 for unlabelled frames).
     pub rules: RuleTally,
@@ -147,6 +161,8 @@ impl FrameSink for Discard {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RunScore {
     confusion: Confusion,
+    /// Filled from the frames that say a confidence; `None` until one does.
+    reliability: Option<Reliability>,
     rules: RuleTally,
     unlabelled: bool,
     dropped_non_finite: usize,
@@ -178,6 +194,16 @@ impl RunScore {
         let labels = frame.points.iter().map(|p| p.label);
         self.confusion
             .add_pairs(labels.clone().zip(output.classes.iter().copied()));
+        if !output.confidence.is_empty() {
+            // Set-aside points are unclassified: never binned.
+            self.reliability.get_or_insert_default().add_points(
+                labels
+                    .clone()
+                    .zip(output.classes.iter().copied())
+                    .zip(output.confidence.iter().copied())
+                    .map(|((l, c), p)| (l, c, p)),
+            );
+        }
         self.rules.add(labels, &output.classes, &output.rules);
         if !output.set_aside.is_empty() {
             // Scored against every input point: one set aside is
@@ -205,6 +231,7 @@ impl RunScore {
         RunOutput {
             frames,
             confusion: (!self.unlabelled).then_some(self.confusion),
+            reliability: self.reliability.filter(|_| !self.unlabelled),
             rules: self.rules,
             timings,
             dropped_non_finite: self.dropped_non_finite,

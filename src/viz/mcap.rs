@@ -4,7 +4,7 @@
 //!
 //! | topic | schema | per frame |
 //! |---|---|---|
-//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32, `rule` u8 (which rule decided the class, `classify::Rule`) |
+//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32, `rule` u8 (which rule decided the class, `classify::Rule`), `confidence` f32 (the probability that the class is right; NaN where the method gives none) |
 //! | `/mirrored` | `foxglove.PointCloud` | the frame's reflections mirrored back through their plane (`map` frame) |
 //! | `/planes` | `foxglove.SceneUpdate` | each reflective landmark: translucent hull and panes, outlined |
 //! | `/tf` | `foxglove.FrameTransform` | `map` → `lidar` (the sensor pose) |
@@ -37,8 +37,8 @@ pub const WORLD_FRAME: &str = "map";
 /// The sensor frame's id in the recording.
 pub const SENSOR_FRAME: &str = "lidar";
 /// Bytes per point on `/cloud`: x, y, z (f32), class (u8), intensity (f32),
-/// rule (u8).
-const CLOUD_STRIDE: u32 = 18;
+/// rule (u8), confidence (f32).
+const CLOUD_STRIDE: u32 = 22;
 /// Bytes per point on `/mirrored`: x, y, z (f32), class (u8).
 const MIRRORED_STRIDE: u32 = 13;
 
@@ -53,6 +53,9 @@ pub struct McapRun<'a> {
     /// The rule that decided each point, per frame (an empty vector where
     /// unknown: the field then reads 0, "undecided").
     pub rules: &'a [Vec<Rule>],
+    /// The confidence of each point's class, per frame (an empty vector
+    /// where unknown: the field then reads NaN).
+    pub confidence: &'a [Vec<f32>],
     /// Reflective planes, world frame.
     pub planes: &'a [BoundedPlane],
     /// Hull margin used to mirror reflections back (metres).
@@ -88,8 +91,9 @@ pub fn write_run_mcap(path: &Path, run: &McapRun<'_>) -> Result<McapSummary> {
     let mut recorder = McapRecorder::create(path, run.planes, run.hull_margin)?;
     for (k, pose) in poses.iter().enumerate() {
         let rules = run.rules.get(k).map_or(&[][..], |r| r.as_slice());
+        let confidence = run.confidence.get(k).map_or(&[][..], |c| c.as_slice());
         let frame = run.sequence.frame(k)?;
-        recorder.add(&frame, pose, &run.classes[k], rules)?;
+        recorder.add(&frame, pose, &run.classes[k], rules, confidence)?;
     }
     recorder.finish()
 }
@@ -147,14 +151,16 @@ impl McapRecorder {
         })
     }
 
-    /// Record one frame with its pose (`T_world_sensor`), classes and the
-    /// rules that decided them (empty where unknown).
+    /// Record one frame with its pose (`T_world_sensor`), classes, the
+    /// rules that decided them and their confidences (either empty where
+    /// unknown).
     pub fn add(
         &mut self,
         frame: &Frame,
         pose: &Isometry3<f64>,
         classes: &[Class],
         rules: &[Rule],
+        confidence: &[f32],
     ) -> Result<()> {
         if classes.len() != frame.points.len() {
             return Err(Error::Input(format!(
@@ -170,13 +176,7 @@ impl McapRecorder {
         let t = stamp.total_nanos();
 
         // Classified cloud, world frame.
-        let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
-        for (i, (pt, class)) in frame.points.iter().zip(classes).enumerate() {
-            push_xyz(&mut data, &(pose * pt.position()));
-            data.push(class.id());
-            data.extend_from_slice(&pt.intensity.to_le_bytes());
-            data.push(rules.get(i).map_or(0, |r| r.id()));
-        }
+        let data = cloud_data(frame, &pose, classes, rules, confidence);
         self.summary.cloud_points += frame.points.len();
         self.cloud
             .log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
@@ -295,6 +295,27 @@ impl Trail {
     }
 }
 
+/// The `/cloud` records of a frame (`CLOUD_STRIDE` bytes a point, fields
+/// as [`point_cloud`] names them): rule 0 and confidence NaN where unknown.
+fn cloud_data(
+    frame: &Frame,
+    pose: &Isometry3<f64>,
+    classes: &[Class],
+    rules: &[Rule],
+    confidence: &[f32],
+) -> Vec<u8> {
+    let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
+    for (i, (pt, class)) in frame.points.iter().zip(classes).enumerate() {
+        push_xyz(&mut data, &(pose * pt.position()));
+        data.push(class.id());
+        data.extend_from_slice(&pt.intensity.to_le_bytes());
+        data.push(rules.get(i).map_or(0, |r| r.id()));
+        let p = confidence.get(i).copied().unwrap_or(f32::NAN);
+        data.extend_from_slice(&p.to_le_bytes());
+    }
+    data
+}
+
 fn tmp_path(path: &Path) -> PathBuf {
     let mut name = path.file_name().unwrap_or_default().to_os_string();
     name.push(".tmp");
@@ -325,6 +346,7 @@ fn point_cloud(stamp: Timestamp, data: Vec<u8>, stride: u32, intensity: bool) ->
     if intensity {
         fields.push(field("intensity", 13, NumericType::Float32));
         fields.push(field("rule", 17, NumericType::Uint8));
+        fields.push(field("confidence", 18, NumericType::Float32));
     }
     PointCloud {
         timestamp: Some(stamp),
@@ -508,6 +530,7 @@ mod tests {
                             sequence: &seq,
                             classes: &classes,
                             rules: &[],
+                            confidence: &[],
                             planes: &planes,
                             hull_margin: 0.0,
                         },
@@ -533,6 +556,7 @@ mod tests {
                 sequence: &seq,
                 classes: &classes,
                 rules: &[],
+                confidence: &[],
                 planes: &[],
                 hull_margin: 0.0,
             },
@@ -571,13 +595,49 @@ mod tests {
         let mut recorder = McapRecorder::create(&path, &[], 0.0).unwrap();
         let frame = seq.frame(0).unwrap();
         recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 3], &[])
+            .add(&frame, &Isometry3::identity(), &[Class::Normal; 3], &[], &[])
             .unwrap();
         assert!(recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 2], &[])
+            .add(&frame, &Isometry3::identity(), &[Class::Normal; 2], &[], &[])
             .is_err());
         drop(recorder);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    /// `/cloud` names its fields at the offsets its records are written
+    /// with: each point's class, intensity, rule and confidence read back
+    /// from where the schema says they are.
+    #[test]
+    fn cloud_fields_match_the_records() {
+        let seq = sequence(1, 3);
+        let frame = seq.frame(0).unwrap();
+        let pose = Isometry3::translation(1.0, 0.0, 0.0);
+        let classes = [Class::Normal, Class::Glass, Class::Reflection];
+        let rules = [Rule::Undecided; 3];
+        let confidence = [0.25f32, 1.0, 0.5];
+        let data = cloud_data(&frame, &pose, &classes, &rules, &confidence);
+        let cloud = point_cloud(Timestamp::new(0, 0), data, CLOUD_STRIDE, true);
+        assert_eq!(cloud.data.len(), 3 * CLOUD_STRIDE as usize);
+        let at = |name: &str| {
+            let f = cloud.fields.iter().find(|f| f.name == name).unwrap();
+            (f.offset as usize, f.r#type)
+        };
+        let float = NumericType::Float32 as i32;
+        let (off, ty) = at("confidence");
+        assert_eq!(ty, float);
+        assert_eq!(off + 4, CLOUD_STRIDE as usize, "the last field ends the record");
+        for (k, rec) in cloud.data.chunks_exact(CLOUD_STRIDE as usize).enumerate() {
+            let f32_at = |o: usize| f32::from_le_bytes(rec[o..o + 4].try_into().unwrap());
+            assert_eq!(f32_at(off), confidence[k]);
+            assert_eq!(rec[at("class").0], classes[k].id());
+            assert_eq!(f32_at(at("intensity").0), 7.0);
+            assert_eq!(rec[at("rule").0], Rule::Undecided.id());
+            assert_eq!(f32_at(at("x").0), 4.0, "posed: 3 m ahead, 1 m along x");
+        }
+        // Without confidences the field reads NaN.
+        let data = cloud_data(&frame, &pose, &classes, &rules, &[]);
+        let p = f32::from_le_bytes(data[off..off + 4].try_into().unwrap());
+        assert!(p.is_nan());
     }
 
     #[test]
@@ -590,6 +650,7 @@ mod tests {
                 sequence: &seq,
                 classes: &[],
                 rules: &[],
+                confidence: &[],
                 planes: &[],
                 hull_margin: 0.0,
             },
