@@ -86,7 +86,11 @@ fn assert_finite_map(path: &Path) -> usize {
             assert!(c.is_finite(), "{}: coordinate {c}", path.display());
         }
         let p = float(rec, 17);
-        assert!((0.0..=1.0).contains(&p), "{}: confidence {p}", path.display());
+        assert!(
+            (0.0..=1.0).contains(&p),
+            "{}: confidence {p}",
+            path.display()
+        );
     }
     body.len() / RECORD
 }

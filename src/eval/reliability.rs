@@ -285,7 +285,11 @@ mod tests {
         assert!(rep.bins[5].mean_confidence.is_nan());
         assert_eq!(rep.bins[5].points, 0);
         // ECE = 4/6 * |0.75 - 0.95| + 2/6 * |0.5 - 0.25| = 0.1333 + 0.0833.
-        assert!(close(rep.ece, 4.0 / 6.0 * 0.2 + 2.0 / 6.0 * 0.25), "{}", rep.ece);
+        assert!(
+            close(rep.ece, 4.0 / 6.0 * 0.2 + 2.0 / 6.0 * 0.25),
+            "{}",
+            rep.ece
+        );
         assert!(close(rep.accuracy, 4.0 / 6.0));
         // Confident: the four of bin 9 (0.9 included), three correct.
         assert_eq!(rep.confident_points, 4);

@@ -102,11 +102,17 @@ mod tests {
         let path = dir.path().join("frame7.prob");
         std::fs::write(&path, [0u8; 6]).unwrap();
         let m = message(read_probs(&path).unwrap_err());
-        assert!(m.contains("frame7.prob") && m.contains("not a multiple of 4"), "{m}");
+        assert!(
+            m.contains("frame7.prob") && m.contains("not a multiple of 4"),
+            "{m}"
+        );
 
         write_probs(&path, &[0.5, 0.25]).unwrap();
         let m = message(read_probs_for(&path, 3).unwrap_err());
-        assert!(m.contains("frame7.prob") && m.contains("2 confidences for 3 points"), "{m}");
+        assert!(
+            m.contains("frame7.prob") && m.contains("2 confidences for 3 points"),
+            "{m}"
+        );
 
         for (bad, shown) in [(f32::NAN, "NaN"), (1.5, "1.5"), (-0.25, "-0.25")] {
             let mut bytes = Vec::new();
@@ -115,7 +121,10 @@ mod tests {
             }
             std::fs::write(&path, bytes).unwrap();
             let m = message(read_probs(&path).unwrap_err());
-            assert!(m.contains("frame7.prob") && m.contains(&format!("point 2 has confidence {shown}")), "{m}");
+            assert!(
+                m.contains("frame7.prob") && m.contains(&format!("point 2 has confidence {shown}")),
+                "{m}"
+            );
         }
         let m = read_probs(&dir.path().join("missing.prob"))
             .unwrap_err()

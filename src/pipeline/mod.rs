@@ -238,3 +238,112 @@ impl RunScore {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::Point;
+
+    fn output(classes: Vec<Class>, confidence: Vec<f32>, aside: SetAside) -> FrameOutput {
+        FrameOutput {
+            name: "f".into(),
+            rules: Vec::new(),
+            classes,
+            confidence,
+            planes: 0,
+            candidates: 0,
+            set_aside: aside,
+        }
+    }
+
+    /// One confidence per input point, 0 where a point was set aside; none
+    /// at all when the method gives none.
+    #[test]
+    fn input_confidence_keeps_a_slot_for_every_input_point() {
+        let aside = SetAside {
+            positions: vec![0, 3],
+            labels: vec![1, 5],
+        };
+        let out = output(
+            vec![Class::Normal, Class::Glass, Class::Reflection],
+            vec![0.5, 0.75, 1.0],
+            aside.clone(),
+        );
+        assert_eq!(out.input_confidence(), vec![0.0, 0.5, 0.75, 0.0, 1.0]);
+        assert_eq!(out.input_class_ids(), vec![0, 1, 2, 0, 5]);
+        let silent = output(vec![Class::Normal; 3], Vec::new(), aside);
+        assert!(silent.input_confidence().is_empty());
+    }
+
+    /// The run's reliability counts the frames that give confidences, under
+    /// the confusion's scoring; set-aside points are never binned; a run
+    /// whose frames give none has no reliability.
+    #[test]
+    fn the_run_score_bins_the_confidences() {
+        let frame = |labels: &[u8]| Frame {
+            name: "f".into(),
+            stamp: 0.0,
+            points: labels
+                .iter()
+                .map(|&label| Point {
+                    xyz: [1.0, 0.0, 0.0],
+                    label,
+                    ..Default::default()
+                })
+                .collect(),
+            has_labels: true,
+            dropped_non_finite: 0,
+            intensity_scale: None,
+        };
+        let path = Path::new("f.ply");
+        let mut score = RunScore::default();
+        // Mirror (3) predicted glass: right; normal predicted obstacle:
+        // wrong; an ignored label; an unclassified point.
+        let a = frame(&[3, 1, 4, 1]);
+        let aside = SetAside {
+            positions: vec![1],
+            labels: vec![1],
+        };
+        let classes = vec![
+            Class::Glass,
+            Class::Obstacle,
+            Class::Normal,
+            Class::Unclassified,
+        ];
+        score.add(
+            path,
+            &a,
+            &output(classes.clone(), vec![0.95, 0.35, 0.95, 0.5], aside),
+        );
+        // A frame without confidences adds nothing to the reliability.
+        score.add(path, &a, &output(classes, Vec::new(), SetAside::default()));
+        let run = score.finish(Vec::new(), StageTimings::default());
+        let r = run.reliability.expect("confidences were given").report();
+        assert_eq!(r.points, 2);
+        assert_eq!((r.bins[9].points, r.bins[9].correct), (1, 1));
+        assert_eq!((r.bins[3].points, r.bins[3].correct), (1, 0));
+        assert_eq!(r.confident_points, 1);
+        assert!((r.confident_accuracy - 1.0).abs() < 1e-12);
+        // The confusion saw every point of both frames, set-aside included.
+        assert_eq!(
+            run.confusion
+                .unwrap()
+                .by_label
+                .iter()
+                .flatten()
+                .sum::<u64>(),
+            9
+        );
+
+        let mut silent = RunScore::default();
+        silent.add(
+            path,
+            &a,
+            &output(vec![Class::Normal; 4], Vec::new(), SetAside::default()),
+        );
+        assert!(silent
+            .finish(Vec::new(), StageTimings::default())
+            .reliability
+            .is_none());
+    }
+}

@@ -595,10 +595,22 @@ mod tests {
         let mut recorder = McapRecorder::create(&path, &[], 0.0).unwrap();
         let frame = seq.frame(0).unwrap();
         recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 3], &[], &[])
+            .add(
+                &frame,
+                &Isometry3::identity(),
+                &[Class::Normal; 3],
+                &[],
+                &[],
+            )
             .unwrap();
         assert!(recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 2], &[], &[])
+            .add(
+                &frame,
+                &Isometry3::identity(),
+                &[Class::Normal; 2],
+                &[],
+                &[]
+            )
             .is_err());
         drop(recorder);
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
@@ -625,7 +637,11 @@ mod tests {
         let float = NumericType::Float32 as i32;
         let (off, ty) = at("confidence");
         assert_eq!(ty, float);
-        assert_eq!(off + 4, CLOUD_STRIDE as usize, "the last field ends the record");
+        assert_eq!(
+            off + 4,
+            CLOUD_STRIDE as usize,
+            "the last field ends the record"
+        );
         for (k, rec) in cloud.data.chunks_exact(CLOUD_STRIDE as usize).enumerate() {
             let f32_at = |o: usize| f32::from_le_bytes(rec[o..o + 4].try_into().unwrap());
             assert_eq!(f32_at(off), confidence[k]);
