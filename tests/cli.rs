@@ -359,12 +359,25 @@ fn plane_optimized_writes_the_map_files() {
         .parse()
         .unwrap();
     assert!(count > 10_000, "{count} points");
-    assert!(header.contains("property uchar class") && header.contains("property uchar mirrored"));
-    assert_eq!(ply.len() - header_end, count * 17);
-    // Mirrored reflections are in the map.
+    assert!(
+        header.contains("property uchar class")
+            && header.contains("property uchar mirrored")
+            && header.contains("property float confidence")
+    );
+    const RECORD: usize = 21;
+    assert_eq!(ply.len() - header_end, count * RECORD);
+    // Mirrored reflections are in the map, each with the confidence of
+    // its class.
     let body = &ply[header_end..];
-    let mirrored = (0..count).filter(|i| body[i * 17 + 16] == 1).count();
-    assert!(mirrored > 100, "{mirrored} mirrored points");
+    let mirrored = (0..count)
+        .filter(|i| body[i * RECORD + 16] == 1)
+        .collect::<Vec<_>>();
+    assert!(mirrored.len() > 100, "{} mirrored points", mirrored.len());
+    for i in mirrored {
+        let at = i * RECORD + 17;
+        let p = f32::from_le_bytes(body[at..at + 4].try_into().unwrap());
+        assert!((0.0..=1.0).contains(&p), "point {i}: confidence {p}");
+    }
 }
 
 /// An OS error is said once, not once by the library's error and again by

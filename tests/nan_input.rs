@@ -126,14 +126,19 @@ fn write_bag(path: &Path, frames: &[Frame]) {
     w.finish().unwrap();
 }
 
-/// The clean frames' predictions `want` with a 0 at every position of
-/// `holed` where a point cannot be a return: what a run on the holed
-/// frames must write (one label per input point).
-fn with_zeros(want: &BTreeMap<String, Vec<u8>>, holed: &[Frame]) -> BTreeMap<String, Vec<u8>> {
+/// The clean frames' predictions `want` (`.label` or, with `extension`
+/// "prob", `.prob` files: 4 bytes a point either way) with a 0 at every
+/// position of `holed` where a point cannot be a return: what a run on the
+/// holed frames must write (one value per input point).
+fn with_zeros(
+    want: &BTreeMap<String, Vec<u8>>,
+    holed: &[Frame],
+    extension: &str,
+) -> BTreeMap<String, Vec<u8>> {
     holed
         .iter()
         .map(|h| {
-            let name = format!("{}.label", h.name);
+            let name = format!("{}.{extension}", h.name);
             let mut clean = want[&name].chunks_exact(4);
             let mut out = Vec::with_capacity(4 * h.points.len());
             for p in &h.points {
@@ -190,7 +195,10 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         assert_eq!(want[&format!("{}.label", f.name)].len(), 4 * f.points.len());
     }
 
-    let want = with_zeros(&want, &holed);
+    let want = with_zeros(&want, &holed, "label");
+    // The confidences too: 0.0 (four zero bytes) at each hole.
+    let want_probs = with_zeros(&common::confidences(&reference), &holed, "prob");
+    assert_eq!(want_probs.len(), clean.len());
     let from_ply = tmp.path().join("ply");
     let o = detect(&["--frames", frames_dir.to_str().unwrap()], &from_ply);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -199,6 +207,11 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         common::predictions(&from_ply),
         want,
         "NaN points change nothing but their own label, 0"
+    );
+    assert_eq!(
+        common::confidences(&from_ply),
+        want_probs,
+        "NaN points change nothing but their own confidence, 0"
     );
     assert_eq!(dropped_in_metrics(&from_ply), total as u64);
     for (f, h) in clean.iter().zip(&holed) {
@@ -229,6 +242,7 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         want,
         "the bag gives the same"
     );
+    assert_eq!(common::confidences(&from_bag), want_probs);
     assert_eq!(dropped_in_metrics(&from_bag), total as u64);
     assert!(assert_finite_map(&from_bag.join("around_corner.ply")) > 10_000);
 }
