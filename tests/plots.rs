@@ -26,6 +26,7 @@ fn point(x: f64, y: f64, z: f64, class: Class) -> MapPoint {
         xyz: [x as f32, y as f32, z as f32],
         class,
         mirrored: false,
+        confidence: 1.0,
     }
 }
 
@@ -182,7 +183,6 @@ fn the_top_view_is_a_slice_above_the_floor() {
         let layer = Layer::Points {
             class,
             mirrored: false,
-            confidence: 1.0,
         };
         let want = pts.iter().filter(|p| p.class == class && inside(p)).count();
         assert_eq!(drawn.panel.count(layer), want, "{class:?}");
