@@ -25,6 +25,8 @@ fn detect_then_eval_on_the_sample() {
         "{stdout}"
     );
     let mut rule_tally = std::collections::BTreeMap::new();
+    // The calibration recomputed from the files a run leaves.
+    let mut reliability = specular::eval::Reliability::default();
     for entry in specular::io::list_frames(&sample.join("frames")).unwrap() {
         let frame = specular::io::read_frame(&entry.path).unwrap();
         let labels = specular::io::read_labels(
@@ -33,6 +35,14 @@ fn detect_then_eval_on_the_sample() {
         .unwrap();
         assert_eq!(labels.len(), frame.points.len());
         assert!(labels.iter().all(|l| [0, 1, 2, 5, 6].contains(l)));
+        // The confidence of every point's class, beside its label.
+        let probs = specular::io::read_probs_for(
+            &out.path().join(format!("predictions/{}.prob", entry.name)),
+            frame.points.len(),
+        )
+        .unwrap();
+        let classes: Vec<Class> = labels.iter().map(|&l| Class::from_id(l)).collect();
+        reliability.add(&frame.labels(), &classes, &probs);
         // --rules: the deciding rule of every point, beside its label.
         let rules =
             specular::io::read_labels(&out.path().join(format!("predictions/{}.rule", entry.name)))
@@ -75,14 +85,39 @@ fn detect_then_eval_on_the_sample() {
         "{}",
         metrics["rules"]
     );
+    // metrics.json's reliability is that of the .prob files.
+    let want = reliability.report();
+    assert!(want.points > 10_000, "{}", want.points);
+    let rel = &metrics["reliability"];
+    assert_eq!(rel["points"], want.points, "{rel}");
+    for (b, w) in rel["bins"].as_array().unwrap().iter().zip(&want.bins) {
+        assert_eq!(b["points"], w.points, "{rel}");
+        assert_eq!(b["correct"], w.correct, "{rel}");
+    }
+    assert!(
+        (rel["ece"].as_f64().unwrap() - want.ece).abs() < 1e-9,
+        "{rel}"
+    );
+    let json = out.path().join("eval.json");
     let e = specular(&[
         "eval",
         "--frames",
         s(&sample.join("frames")),
         "--pred",
         s(out.path()),
+        "--json",
+        s(&json),
     ]);
     assert!(e.status.success(), "{}", stderr(&e));
+    // eval reads the .prob files too, to the same calibration.
+    let evaluated: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(evaluated["reliability"]["bins"], rel["bins"]);
+    assert!(
+        String::from_utf8_lossy(&e.stdout).contains("Confidence >= 0.9:"),
+        "{}",
+        String::from_utf8_lossy(&e.stdout)
+    );
     // eval recomputes exactly what detect reported.
     let line = |text: &str| {
         text.lines()
@@ -214,6 +249,61 @@ fn eval_rejects_predictions_of_the_wrong_length() {
     assert!(err.contains("1 predictions for 33718 points"), "{err}");
 }
 
+/// A `.prob` file beside a good label file is checked: one probability
+/// per point, each in [0, 1]; the error names the file.
+#[test]
+fn eval_rejects_bad_confidence_files() {
+    let sample = common::sample_dir();
+    let entries = specular::io::list_frames(&sample.join("frames")).unwrap();
+    let pred = tempfile::tempdir().unwrap();
+    let mut first_points = 0;
+    for (k, e) in entries.iter().enumerate() {
+        let n = specular::io::read_frame(&e.path).unwrap().points.len();
+        specular::io::write_labels(&pred.path().join(format!("{}.label", e.name)), &vec![1; n])
+            .unwrap();
+        if k == 0 {
+            first_points = n;
+        }
+    }
+    let prob = pred.path().join(format!("{}.prob", entries[0].name));
+    let eval = || {
+        specular(&[
+            "eval",
+            "--frames",
+            s(&sample.join("frames")),
+            "--pred",
+            s(pred.path()),
+        ])
+    };
+    // A good file: scored, and the calibration printed.
+    specular::io::write_probs(&prob, &vec![0.95; first_points]).unwrap();
+    let o = eval();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("1 frames with .prob files"), "{out}");
+    assert!(stderr(&o).contains("only 1 of 3 frames"), "{}", stderr(&o));
+    // One value too few.
+    specular::io::write_probs(&prob, &vec![0.5; first_points - 1]).unwrap();
+    let o = eval();
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains(s(&prob)) && err.contains("one per input point"),
+        "{err}"
+    );
+    // A value that is not a probability.
+    let mut probs = vec![0.5f32; first_points];
+    probs[7] = 1.25;
+    specular::io::write_probs(&prob, &probs).unwrap();
+    let o = eval();
+    assert!(!o.status.success());
+    let err = stderr(&o);
+    assert!(
+        err.contains(s(&prob)) && err.contains("point 7 has confidence 1.25"),
+        "{err}"
+    );
+}
+
 #[test]
 fn an_unknown_config_is_a_clear_error() {
     let o = specular(&["config", "--config", "/nonexistent/x.toml"]);
@@ -269,12 +359,25 @@ fn plane_optimized_writes_the_map_files() {
         .parse()
         .unwrap();
     assert!(count > 10_000, "{count} points");
-    assert!(header.contains("property uchar class") && header.contains("property uchar mirrored"));
-    assert_eq!(ply.len() - header_end, count * 17);
-    // Mirrored reflections are in the map.
+    assert!(
+        header.contains("property uchar class")
+            && header.contains("property uchar mirrored")
+            && header.contains("property float confidence")
+    );
+    const RECORD: usize = 21;
+    assert_eq!(ply.len() - header_end, count * RECORD);
+    // Mirrored reflections are in the map, each with the confidence of
+    // its class.
     let body = &ply[header_end..];
-    let mirrored = (0..count).filter(|i| body[i * 17 + 16] == 1).count();
-    assert!(mirrored > 100, "{mirrored} mirrored points");
+    let mirrored = (0..count)
+        .filter(|i| body[i * RECORD + 16] == 1)
+        .collect::<Vec<_>>();
+    assert!(mirrored.len() > 100, "{} mirrored points", mirrored.len());
+    for i in mirrored {
+        let at = i * RECORD + 17;
+        let p = f32::from_le_bytes(body[at..at + 4].try_into().unwrap());
+        assert!((0.0..=1.0).contains(&p), "point {i}: confidence {p}");
+    }
 }
 
 /// An OS error is said once, not once by the library's error and again by

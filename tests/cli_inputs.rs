@@ -184,10 +184,9 @@ fn a_simulated_scene_is_an_input_of_detect_and_slam() {
     assert!(o.status.success(), "{}", stderr(&o));
     let metrics = std::fs::read_to_string(out.join("metrics.json")).unwrap();
     assert!(metrics.contains("\"miou\""), "{metrics}");
-    assert_eq!(
-        std::fs::read_dir(out.join("predictions")).unwrap().count(),
-        6
-    );
+    // One label file and one confidence file per frame.
+    assert_eq!(common::predictions(&out).len(), 6);
+    assert_eq!(common::confidences(&out).len(), 6);
 
     let slam = tmp.path().join("slam");
     let o = specular(&[

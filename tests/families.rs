@@ -185,7 +185,8 @@ fn a_family_scene_file_rebuilds_its_frames() {
 }
 
 /// The benchmark's quick mode runs both pipelines on one seed of every
-/// family and writes its table, scores and plot; a second run into the
+/// family and writes its table, scores, plot and the reliability diagram
+/// of the confidences; a second run into the
 /// same directory is refused without `--force`.
 #[test]
 fn the_quick_benchmark_runs_end_to_end() {
@@ -218,6 +219,27 @@ fn the_quick_benchmark_runs_end_to_end() {
         "{table}"
     );
     assert!(out.join("bench.png").is_file());
+    // The calibration of the confidences over every seed: ten bins whose
+    // counts add up to the points binned, and there are points.
+    let rel = &json["reliability"];
+    let bins = rel["bins"].as_array().unwrap();
+    assert_eq!(bins.len(), 10, "{rel}");
+    let binned: u64 = bins.iter().map(|b| b["points"].as_u64().unwrap()).sum();
+    assert!(binned > 1000, "{rel}");
+    assert_eq!(binned, rel["points"].as_u64().unwrap());
+    for b in bins.iter().filter(|b| b["points"].as_u64().unwrap() > 0) {
+        let acc = b["accuracy"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&acc), "{b}");
+    }
+    let ece = rel["ece"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&ece), "{rel}");
+    assert!(
+        table.contains("| confidence | points | predicted (mean) | measured accuracy |")
+            && table.contains("Confidence >= 0.9:"),
+        "{table}"
+    );
+    let png = read(&out.join("reliability.png"));
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"));
     let again = specular(&args);
     assert!(!again.status.success());
     assert!(stderr(&again).contains("--force"), "{}", stderr(&again));

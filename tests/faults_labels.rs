@@ -239,12 +239,8 @@ fn eval_rejects_values_that_are_no_class() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
     ok(&detect_sample(&out, &["--method", "single-scan", "--lean"]));
-    let file = std::fs::read_dir(out.join("predictions"))
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
+    let name = common::predictions(&out).into_keys().next().unwrap();
+    let file = out.join("predictions").join(name);
     let mut bytes = std::fs::read(&file).unwrap();
     bytes[..4].copy_from_slice(&7u32.to_le_bytes());
     std::fs::write(&file, bytes).unwrap();

@@ -71,19 +71,28 @@ fn detect(input: &[&str], out: &Path) -> Output {
 }
 
 /// Every coordinate of a map PLY written by specular (binary: `float x y
-/// z`, then five `uchar`s) is finite; returns the vertex count.
+/// z`, five `uchar`s, `float confidence`) is finite, and every confidence a
+/// probability; returns the vertex count.
 fn assert_finite_map(path: &Path) -> usize {
+    const RECORD: usize = 21;
     let ply = std::fs::read(path).unwrap();
     let end = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
     let body = &ply[end..];
-    assert_eq!(body.len() % 17, 0, "{}", path.display());
-    for rec in body.chunks_exact(17) {
+    assert_eq!(body.len() % RECORD, 0, "{}", path.display());
+    let float = |rec: &[u8], at: usize| f32::from_le_bytes(rec[at..at + 4].try_into().unwrap());
+    for rec in body.chunks_exact(RECORD) {
         for k in 0..3 {
-            let c = f32::from_le_bytes(rec[4 * k..4 * k + 4].try_into().unwrap());
+            let c = float(rec, 4 * k);
             assert!(c.is_finite(), "{}: coordinate {c}", path.display());
         }
+        let p = float(rec, 17);
+        assert!(
+            (0.0..=1.0).contains(&p),
+            "{}: confidence {p}",
+            path.display()
+        );
     }
-    body.len() / 17
+    body.len() / RECORD
 }
 
 fn dropped_in_metrics(dir: &Path) -> u64 {
@@ -117,14 +126,19 @@ fn write_bag(path: &Path, frames: &[Frame]) {
     w.finish().unwrap();
 }
 
-/// The clean frames' predictions `want` with a 0 at every position of
-/// `holed` where a point cannot be a return: what a run on the holed
-/// frames must write (one label per input point).
-fn with_zeros(want: &BTreeMap<String, Vec<u8>>, holed: &[Frame]) -> BTreeMap<String, Vec<u8>> {
+/// The clean frames' predictions `want` (`.label` or, with `extension`
+/// "prob", `.prob` files: 4 bytes a point either way) with a 0 at every
+/// position of `holed` where a point cannot be a return: what a run on the
+/// holed frames must write (one value per input point).
+fn with_zeros(
+    want: &BTreeMap<String, Vec<u8>>,
+    holed: &[Frame],
+    extension: &str,
+) -> BTreeMap<String, Vec<u8>> {
     holed
         .iter()
         .map(|h| {
-            let name = format!("{}.label", h.name);
+            let name = format!("{}.{extension}", h.name);
             let mut clean = want[&name].chunks_exact(4);
             let mut out = Vec::with_capacity(4 * h.points.len());
             for p in &h.points {
@@ -181,7 +195,10 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         assert_eq!(want[&format!("{}.label", f.name)].len(), 4 * f.points.len());
     }
 
-    let want = with_zeros(&want, &holed);
+    let want = with_zeros(&want, &holed, "label");
+    // The confidences too: 0.0 (four zero bytes) at each hole.
+    let want_probs = with_zeros(&common::confidences(&reference), &holed, "prob");
+    assert_eq!(want_probs.len(), clean.len());
     let from_ply = tmp.path().join("ply");
     let o = detect(&["--frames", frames_dir.to_str().unwrap()], &from_ply);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -190,6 +207,11 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         common::predictions(&from_ply),
         want,
         "NaN points change nothing but their own label, 0"
+    );
+    assert_eq!(
+        common::confidences(&from_ply),
+        want_probs,
+        "NaN points change nothing but their own confidence, 0"
     );
     assert_eq!(dropped_in_metrics(&from_ply), total as u64);
     for (f, h) in clean.iter().zip(&holed) {
@@ -220,6 +242,7 @@ fn non_finite_points_are_dropped_from_ply_frames_and_bags() {
         want,
         "the bag gives the same"
     );
+    assert_eq!(common::confidences(&from_bag), want_probs);
     assert_eq!(dropped_in_metrics(&from_bag), total as u64);
     assert!(assert_finite_map(&from_bag.join("around_corner.ply")) > 10_000);
 }

@@ -26,6 +26,7 @@ fn point(x: f64, y: f64, z: f64, class: Class) -> MapPoint {
         xyz: [x as f32, y as f32, z as f32],
         class,
         mirrored: false,
+        confidence: 1.0,
     }
 }
 

@@ -91,6 +91,8 @@ fn every_bag_form_gives_the_predictions_of_the_ply_frames() {
     );
     let want = predictions(&ply);
     assert_eq!(want.len(), 3);
+    let want_probs = common::confidences(&ply);
+    assert_eq!(want_probs.len(), 3);
     let want_metrics = std::fs::read(ply.join("metrics.json")).unwrap();
     let bags = [
         ("sqlite3", sqlite_bag()),
@@ -106,6 +108,7 @@ fn every_bag_form_gives_the_predictions_of_the_ply_frames() {
             &["--poses", s(&poses)],
         );
         assert_eq!(predictions(&out), want, "{name}: predictions");
+        assert_eq!(common::confidences(&out), want_probs, "{name}: confidences");
         assert_eq!(
             std::fs::read(out.join("metrics.json")).unwrap(),
             want_metrics,

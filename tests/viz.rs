@@ -78,6 +78,15 @@ fn detect_writes_mcap_maps_plots_and_report() {
         e.2 += 1;
         if msg.channel.topic == "/cloud" {
             stamps.push(msg.log_time);
+            // The point fields are named in each message (protobuf
+            // strings): the confidence is among them.
+            for name in [&b"rule"[..], b"confidence"] {
+                assert!(
+                    msg.data.windows(name.len()).any(|w| w == name),
+                    "/cloud lacks the field {}",
+                    String::from_utf8_lossy(name)
+                );
+            }
         }
     }
     let expect = [
@@ -102,7 +111,17 @@ fn detect_writes_mcap_maps_plots_and_report() {
     // PLY maps.
     let (n_map, props) = ply_header(&dir.join("map.ply"));
     assert!(n_map > 10_000, "{n_map}");
-    for p in ["x", "y", "z", "red", "green", "blue", "class", "mirrored"] {
+    for p in [
+        "x",
+        "y",
+        "z",
+        "red",
+        "green",
+        "blue",
+        "class",
+        "mirrored",
+        "confidence",
+    ] {
         assert!(props.iter().any(|q| q == p), "map.ply lacks {p}");
     }
     let (n_corner, _) = ply_header(&dir.join("around_corner.ply"));

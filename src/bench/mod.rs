@@ -12,6 +12,9 @@
 //! |---|---|
 //! | this one | what to run ([`BenchSpec`]) and one seed's scores ([`SeedResult`]) |
 //! | [`summary`] | median, 10th percentile and worst per family, the Markdown table |
+//!
+//! The calibration of the per-point confidences is summed over every seed
+//! ([`reliability`]): one reliability diagram per benchmark.
 
 pub mod summary;
 
@@ -21,7 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::classify::Class;
 use crate::config::Config;
-use crate::eval::trajectory_error;
+use crate::eval::{trajectory_error, Reliability};
 use crate::pipeline::registry::{self, DatasetSource};
 use crate::pipeline::{run_plane_optimized, run_slam, Sequence};
 use crate::sim::family::Split;
@@ -29,6 +32,15 @@ use crate::sim::{LabelRule, SceneSource};
 use crate::Result;
 
 pub use summary::{FamilySummary, Stat, Summary, METRICS};
+
+/// The calibration counts of every seed in `results`, summed.
+pub fn reliability(results: &[SeedResult]) -> Reliability {
+    let mut all = Reliability::default();
+    for r in results {
+        all.merge(&r.reliability);
+    }
+    all
+}
 
 /// Frames per sequence of the full benchmark: 20 s at 10 Hz.
 pub const DEFAULT_FRAMES: usize = 200;
@@ -92,6 +104,12 @@ pub struct SeedResult {
     pub points: u64,
     /// Wall time of the sequence (simulation, both pipelines), seconds.
     pub seconds: f64,
+    /// The calibration counts of the plane-optimized pipeline's
+    /// confidences (empty when it gives none). Not written per seed: the
+    /// benchmark writes them summed over all seeds
+    /// ([`Reliability::merge`]).
+    #[serde(skip)]
+    pub reliability: Reliability,
 }
 
 impl SeedResult {
@@ -154,6 +172,7 @@ pub fn run_seed(
         ate,
         points: m.points,
         seconds: started.elapsed().as_secs_f64(),
+        reliability: out.run.reliability.unwrap_or_default(),
     })
 }
 

@@ -1,6 +1,7 @@
 //! `specular bench families`: the held-out benchmark (both pipelines over
 //! seeds of every scene family), its table on stdout and `bench.md`,
-//! `bench.json` and `bench.png` in the output directory.
+//! `bench.json`, `bench.png` and `reliability.png` (the calibration of the
+//! per-point confidences over all seeds) in the output directory.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -61,7 +62,8 @@ struct FamiliesArgs {
     /// A quick check of every family: one seed of 20 frames.
     #[arg(long)]
     quick: bool,
-    /// Output directory for bench.md, bench.json and bench.png.
+    /// Output directory for bench.md, bench.json, bench.png and
+    /// reliability.png.
     #[arg(long)]
     out: Option<PathBuf>,
     /// Replace an earlier benchmark's files in `--out`.
@@ -134,6 +136,7 @@ fn families(args: FamiliesArgs) -> Result<()> {
         results.push(r);
     }
     let summary = Summary::of(&results);
+    let reliability = bench::reliability(&results).report();
     let title = format!(
         "{} split, {} seeds x {} frames per family, config {}",
         split.name(),
@@ -142,8 +145,9 @@ fn families(args: FamiliesArgs) -> Result<()> {
         args.config
     );
     let table = format!(
-        "# specular bench families\n\n{title}; each cell: median / 10th percentile / worst seed (for the ATE, the 90th percentile and the largest).\n\n{}",
-        summary.markdown()
+        "# specular bench families\n\n{title}; each cell: median / 10th percentile / worst seed (for the ATE, the 90th percentile and the largest).\n\n{}\n## Confidence calibration\n\nThe plane-optimized pipeline's points over every seed, binned by the confidence of their class (points with a scored label and a class other than unclassified), against the share of them correct.\n\n{}",
+        summary.markdown(),
+        reliability.markdown()
     );
     println!("{table}");
     let json = serde_json::json!({
@@ -151,6 +155,7 @@ fn families(args: FamiliesArgs) -> Result<()> {
         "config": args.config,
         "spec": spec,
         "summary": summary,
+        "reliability": reliability,
         "seeds": results,
     });
     io::write_atomic(&out.join("bench.json"), |w| {
@@ -158,6 +163,10 @@ fn families(args: FamiliesArgs) -> Result<()> {
     })?;
     io::write_atomic(&out.join("bench.md"), |w| w.write_all(table.as_bytes()))?;
     specular::viz::bench::bench_png(&out.join("bench.png"), &title, &results)?;
-    eprintln!("wrote {}/bench.md, bench.json, bench.png", out.display());
+    specular::viz::bench::reliability_png(&out.join("reliability.png"), &title, &reliability)?;
+    eprintln!(
+        "wrote {}/bench.md, bench.json, bench.png, reliability.png",
+        out.display()
+    );
     Ok(())
 }

@@ -116,6 +116,15 @@ pub fn run(args: DetectArgs) -> Result<()> {
     }
     if let Some(conf) = &result.run.confusion {
         print!("{}", conf.metrics().table());
+        if let Some(r) = result.run.reliability.map(|r| r.report()) {
+            println!(
+                "confidence: expected calibration error {:.3} over {} points; {} points at >= 0.9, {:.1}% of them correct",
+                r.ece,
+                r.points,
+                r.confident_points,
+                100.0 * r.confident_accuracy
+            );
+        }
     } else {
         let counts: Vec<String> = predicted_counts(&result.run)
             .into_iter()

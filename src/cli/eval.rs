@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 use clap::Args;
 use specular::classify::Class;
-use specular::eval::Confusion;
+use specular::eval::{Confusion, Reliability};
 use specular::io;
 
 /// Arguments of `eval`.
@@ -15,7 +15,9 @@ pub struct EvalArgs {
     #[arg(long)]
     pub frames: PathBuf,
     /// Directory of `<stem>.label` predictions (or a run directory holding
-    /// `predictions/`).
+    /// `predictions/`). A `<stem>.prob` beside a label file (one
+    /// little-endian f32 per point, the confidence of its class) is read
+    /// too, and the calibration of the confidences reported.
     #[arg(long)]
     pub pred: PathBuf,
     /// Also write the metrics as JSON to this file.
@@ -37,6 +39,9 @@ pub fn run(args: EvalArgs) -> Result<()> {
     };
     let entries = io::list_frames(&args.frames)?;
     let mut conf = Confusion::default();
+    let mut reliability = Reliability::default();
+    // Frames with a `.prob` file beside their labels.
+    let mut with_probs = 0usize;
     for e in &entries {
         // Scored against every input point: the labels of the points the
         // reader set aside (not finite, at the origin) are put back in
@@ -76,12 +81,33 @@ pub fn run(args: EvalArgs) -> Result<()> {
         let labels = aside.scatter_labels(&frame.labels());
         let classes: Vec<Class> = pred.iter().map(|&id| Class::from_id(id)).collect();
         conf.add(&labels, &classes);
+        let prob_path = pred_dir.join(format!("{}.prob", e.name));
+        if prob_path.exists() {
+            let probs = io::read_probs_for(&prob_path, points)?;
+            reliability.add(&labels, &classes, &probs);
+            with_probs += 1;
+        }
     }
     let metrics = conf.metrics();
     println!("{} frames scored", entries.len());
     print!("{}", metrics.table());
+    let report = (with_probs > 0).then(|| reliability.report());
+    if let Some(r) = &report {
+        if with_probs < entries.len() {
+            eprintln!(
+                "warning: only {with_probs} of {} frames have a .prob file: the calibration is of those",
+                entries.len()
+            );
+        }
+        println!("confidence calibration ({with_probs} frames with .prob files):");
+        print!("{}", r.markdown());
+    }
     if let Some(path) = args.json {
-        let json = serde_json::to_string_pretty(&metrics)?;
+        let mut value = serde_json::to_value(&metrics)?;
+        if let (Some(obj), Some(r)) = (value.as_object_mut(), &report) {
+            obj.insert("reliability".into(), serde_json::to_value(r)?);
+        }
+        let json = serde_json::to_string_pretty(&value)?;
         io::write_atomic(&path, |w| std::io::Write::write_all(w, json.as_bytes()))?;
     }
     Ok(())

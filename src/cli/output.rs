@@ -3,6 +3,10 @@
 //! world maps and the recording grow a frame at a time; the summaries
 //! (metrics, planes, report) are written when the run has succeeded.
 //!
+//! Per frame, `predictions/<stem>.label` (the classes), `<stem>.rule`
+//! (with `--rules`) and `<stem>.prob` (each class's confidence, one
+//! little-endian `f32` per input point, when the method gives one).
+//!
 //! Nothing is left behind by a run that fails: predictions go to
 //! `predictions.partial/` and replace `predictions/` only at the end, the
 //! recording to `run.mcap.tmp`, and both are removed on error.
@@ -151,16 +155,23 @@ impl FrameSink for RunWriter {
             let rules = output.input_rule_ids();
             io::write_labels(&self.partial.join(format!("{}.rule", output.name)), &rules)?;
         }
+        // The confidence of each class, when the method says one (0 where
+        // a point was set aside).
+        if !output.confidence.is_empty() {
+            let probs = output.input_confidence();
+            io::write_probs(&self.partial.join(format!("{}.prob", output.name)), &probs)?;
+        }
         if let Some(pose) = pose {
             self.trajectory.push(pose.translation.vector.into());
+            let confidence = &output.confidence;
             if let Some(map) = &mut self.around {
-                map.add(frame, pose, &output.classes);
+                map.add(frame, pose, &output.classes, confidence);
             }
             if let Some(map) = &mut self.measured {
-                map.add(frame, pose, &output.classes);
+                map.add(frame, pose, &output.classes, confidence);
             }
             if let Some(recorder) = &mut self.recorder {
-                recorder.add(frame, pose, &output.classes, &output.rules)?;
+                recorder.add(frame, pose, &output.classes, &output.rules, confidence)?;
             }
         }
         Ok(())
@@ -182,8 +193,10 @@ impl Drop for RunWriter {
 }
 
 /// Write the summaries of a finished run into `out`: the configuration,
-/// the metrics (when labelled) with the rule tally and the number of input
-/// points dropped as non-finite (`dropped_non_finite_points`), and, with a
+/// the metrics (when labelled) with the rule tally, the number of input
+/// points dropped as non-finite (`dropped_non_finite_points`) and the
+/// calibration of the confidences (`reliability`, when the method gives
+/// them), and, with a
 /// plane map,
 /// `planes.json` and `around_corner.ply`.
 pub(crate) fn write_summaries(
@@ -222,6 +235,14 @@ pub(crate) fn write_summaries(
                 "dropped_non_finite_points".into(),
                 run.dropped_non_finite.into(),
             );
+            // How far the confidences are to be trusted (when the method
+            // gives them).
+            if let Some(r) = &run.reliability {
+                obj.insert(
+                    "reliability".into(),
+                    serde_json::to_value(r.report()).context("serialising reliability")?,
+                );
+            }
         }
         let json = serde_json::to_string_pretty(&value).context("serialising metrics")?;
         io::write_atomic(&out.join("metrics.json"), |w| {

@@ -202,6 +202,8 @@ pub fn run(args: SlamArgs) -> Result<()> {
     let mut reference = None;
     // Counted by the classification pass (`None` with --no-classify).
     let mut dropped_non_finite = None;
+    // The calibration of the confidences with the estimated poses.
+    let mut reliability = None;
     if !args.no_classify {
         // Predictions are written frame by frame as they are classified.
         let mut writer = RunWriter::new(out, &config, OutputOptions::default())?;
@@ -210,6 +212,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         writer.finish()?;
         dropped_non_finite = Some(estimated.run.dropped_non_finite);
         classification = estimated.run.confusion.map(|c| c.metrics());
+        reliability = estimated.run.reliability.map(|r| r.report());
         if classification.is_some() && truth.is_some() {
             let with_truth = run_plane_optimized_into(&sequence, &config, &mut Discard)?;
             reference = with_truth.run.confusion.map(|c| c.metrics());
@@ -247,6 +250,7 @@ pub fn run(args: SlamArgs) -> Result<()> {
         })),
         "classification": classification,
         "classification_true_poses": reference,
+        "reliability": reliability,
         "dropped_non_finite_points": dropped_non_finite,
     });
     let text = serde_json::to_string_pretty(&metrics).context("serialising metrics")?;

@@ -7,11 +7,16 @@
 //! every class's precision, recall and IoU, and counts as removed for the
 //! reflection removal rate.
 //!
+//! Calibration ([`reliability`]): per bin of predicted confidence, the
+//! share of points whose class is right, under the same scoring.
+//!
 //! Trajectories ([`trajectory`]): ATE after SE(3) alignment, RPE per metre
 //! travelled, final drift.
 
 pub mod metrics;
+pub mod reliability;
 pub mod trajectory;
 
 pub use metrics::{ClassScores, Confusion, Metrics, EVAL_CLASSES};
+pub use reliability::{Reliability, ReliabilityBin, ReliabilityReport};
 pub use trajectory::{trajectory_error, umeyama, TrajectoryError};

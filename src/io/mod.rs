@@ -1,6 +1,6 @@
 //! Input and output at the edge of the library: the [`Dataset`] seam (where
 //! a sequence's frames come from), 3DRef PLY frames, ROS 2
-//! bags (rosbag2 directories, MCAP and sqlite3 `.db3` files), TUM and KITTI pose files, prediction labels, and matching frames
+//! bags (rosbag2 directories, MCAP and sqlite3 `.db3` files), TUM and KITTI pose files, prediction labels and their confidences (`.prob`), and matching frames
 //! to poses by timestamp.
 //!
 //! Every reader returns a [`crate::Error`] naming the file and what is wrong;
@@ -17,6 +17,7 @@ pub mod map_ply;
 pub mod mcap_file;
 pub mod planes;
 pub mod ply;
+pub mod prob;
 pub mod ros2_bag;
 pub mod rosbag2;
 pub mod tum;
@@ -35,5 +36,6 @@ pub use ply::{
     parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames, write_frame,
     PlyEncoding,
 };
+pub use prob::{read_probs, read_probs_for, write_probs};
 pub use ros2_bag::{read_bag_frames, BagKind, Ros2Bag};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

@@ -25,7 +25,7 @@ use nalgebra::Isometry3;
 
 use crate::classify::{Class, Rule, RuleTally};
 use crate::cloud::{Frame, SetAside};
-use crate::eval::Confusion;
+use crate::eval::{Confusion, Reliability};
 use crate::reflect::BoundedPlane;
 use crate::Result;
 
@@ -67,6 +67,17 @@ impl FrameOutput {
         let ids: Vec<u8> = self.rules.iter().map(|r| r.id()).collect();
         self.set_aside.scatter(&ids, Rule::Undecided.id())
     }
+
+    /// The confidence of every input point's class, in input order (0 at
+    /// each point set aside, whose class is unclassified). What a `.prob`
+    /// file holds; empty when the method does not say
+    /// ([`confidence`](Self::confidence) is empty).
+    pub fn input_confidence(&self) -> Vec<f32> {
+        if self.confidence.is_empty() {
+            return Vec::new();
+        }
+        self.set_aside.scatter(&self.confidence, 0.0)
+    }
 }
 
 /// A method's result over a sequence.
@@ -78,6 +89,9 @@ pub struct RunOutput {
     /// Confusion counts against the labels (`None` when a frame carries
     /// no labels).
     pub confusion: Option<Confusion>,
+    /// The calibration of the confidences against the labels (`None` when
+    /// a frame carries no labels, or no frame says a confidence).
+    pub reliability: Option<Reliability>,
     /// Points by the rule that decided them, their prediction and their
     /// label (label 0 for unlabelled frames).
     pub rules: RuleTally,
@@ -147,6 +161,8 @@ impl FrameSink for Discard {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct RunScore {
     confusion: Confusion,
+    /// Filled from the frames that say a confidence; `None` until one does.
+    reliability: Option<Reliability>,
     rules: RuleTally,
     unlabelled: bool,
     dropped_non_finite: usize,
@@ -178,6 +194,16 @@ impl RunScore {
         let labels = frame.points.iter().map(|p| p.label);
         self.confusion
             .add_pairs(labels.clone().zip(output.classes.iter().copied()));
+        if !output.confidence.is_empty() {
+            // Set-aside points are unclassified: never binned.
+            self.reliability.get_or_insert_default().add_points(
+                labels
+                    .clone()
+                    .zip(output.classes.iter().copied())
+                    .zip(output.confidence.iter().copied())
+                    .map(|((l, c), p)| (l, c, p)),
+            );
+        }
         self.rules.add(labels, &output.classes, &output.rules);
         if !output.set_aside.is_empty() {
             // Scored against every input point: one set aside is
@@ -205,9 +231,119 @@ impl RunScore {
         RunOutput {
             frames,
             confusion: (!self.unlabelled).then_some(self.confusion),
+            reliability: self.reliability.filter(|_| !self.unlabelled),
             rules: self.rules,
             timings,
             dropped_non_finite: self.dropped_non_finite,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cloud::Point;
+
+    fn output(classes: Vec<Class>, confidence: Vec<f32>, aside: SetAside) -> FrameOutput {
+        FrameOutput {
+            name: "f".into(),
+            rules: Vec::new(),
+            classes,
+            confidence,
+            planes: 0,
+            candidates: 0,
+            set_aside: aside,
+        }
+    }
+
+    /// One confidence per input point, 0 where a point was set aside; none
+    /// at all when the method gives none.
+    #[test]
+    fn input_confidence_keeps_a_slot_for_every_input_point() {
+        let aside = SetAside {
+            positions: vec![0, 3],
+            labels: vec![1, 5],
+        };
+        let out = output(
+            vec![Class::Normal, Class::Glass, Class::Reflection],
+            vec![0.5, 0.75, 1.0],
+            aside.clone(),
+        );
+        assert_eq!(out.input_confidence(), vec![0.0, 0.5, 0.75, 0.0, 1.0]);
+        assert_eq!(out.input_class_ids(), vec![0, 1, 2, 0, 5]);
+        let silent = output(vec![Class::Normal; 3], Vec::new(), aside);
+        assert!(silent.input_confidence().is_empty());
+    }
+
+    /// The run's reliability counts the frames that give confidences, under
+    /// the confusion's scoring; set-aside points are never binned; a run
+    /// whose frames give none has no reliability.
+    #[test]
+    fn the_run_score_bins_the_confidences() {
+        let frame = |labels: &[u8]| Frame {
+            name: "f".into(),
+            stamp: 0.0,
+            points: labels
+                .iter()
+                .map(|&label| Point {
+                    xyz: [1.0, 0.0, 0.0],
+                    label,
+                    ..Default::default()
+                })
+                .collect(),
+            has_labels: true,
+            dropped_non_finite: 0,
+            intensity_scale: None,
+        };
+        let path = Path::new("f.ply");
+        let mut score = RunScore::default();
+        // Mirror (3) predicted glass: right; normal predicted obstacle:
+        // wrong; an ignored label; an unclassified point.
+        let a = frame(&[3, 1, 4, 1]);
+        let aside = SetAside {
+            positions: vec![1],
+            labels: vec![1],
+        };
+        let classes = vec![
+            Class::Glass,
+            Class::Obstacle,
+            Class::Normal,
+            Class::Unclassified,
+        ];
+        score.add(
+            path,
+            &a,
+            &output(classes.clone(), vec![0.95, 0.35, 0.95, 0.5], aside),
+        );
+        // A frame without confidences adds nothing to the reliability.
+        score.add(path, &a, &output(classes, Vec::new(), SetAside::default()));
+        let run = score.finish(Vec::new(), StageTimings::default());
+        let r = run.reliability.expect("confidences were given").report();
+        assert_eq!(r.points, 2);
+        assert_eq!((r.bins[9].points, r.bins[9].correct), (1, 1));
+        assert_eq!((r.bins[3].points, r.bins[3].correct), (1, 0));
+        assert_eq!(r.confident_points, 1);
+        assert!((r.confident_accuracy - 1.0).abs() < 1e-12);
+        // The confusion saw every point of both frames, set-aside included.
+        assert_eq!(
+            run.confusion
+                .unwrap()
+                .by_label
+                .iter()
+                .flatten()
+                .sum::<u64>(),
+            9
+        );
+
+        let mut silent = RunScore::default();
+        silent.add(
+            path,
+            &a,
+            &output(vec![Class::Normal; 4], Vec::new(), SetAside::default()),
+        );
+        assert!(silent
+            .finish(Vec::new(), StageTimings::default())
+            .reliability
+            .is_none());
     }
 }

@@ -107,6 +107,7 @@ mod tests {
             xyz: [x as f32, y as f32, z as f32],
             class,
             mirrored: false,
+            confidence: 1.0,
         }
     }
 

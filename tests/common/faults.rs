@@ -77,8 +77,8 @@ pub fn read_u32s(path: &Path) -> Vec<u32> {
     io::read_labels(path).unwrap()
 }
 
-/// Every label file in `out/predictions` (and rule file, when `rules`)
-/// has one entry per input point, 0 at every hole.
+/// Every label file in `out/predictions` (and rule file, when `rules`, and
+/// confidence file) has one entry per input point, 0 at every hole.
 pub fn assert_one_label_per_input_point(out: &Path, holed: &[(String, Vec<bool>)], rules: bool) {
     for (name, holes) in holed {
         let mut files = vec![out.join(format!("predictions/{name}.label"))];
@@ -99,6 +99,19 @@ pub fn assert_one_label_per_input_point(out: &Path, holed: &[(String, Vec<bool>)
                 file.display()
             );
         }
+        // The confidences: one per input point too, 0 at every hole.
+        let file = out.join(format!("predictions/{name}.prob"));
+        let probs = io::read_probs_for(&file, holes.len()).unwrap();
+        for (i, (&p, &h)) in probs.iter().zip(holes).enumerate() {
+            if h {
+                assert_eq!(p, 0.0, "{} point {i}", file.display());
+            }
+        }
+        assert!(
+            probs.iter().zip(holes).any(|(&p, &h)| !h && p > 0.0),
+            "{}: no confidence",
+            file.display()
+        );
     }
 }
 

@@ -41,13 +41,24 @@ pub fn shared_frames() -> Option<PathBuf> {
 
 /// A run's predictions (`OUT/predictions/*.label`), by file name, as bytes.
 pub fn predictions(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    prediction_files(dir, "label")
+}
+
+/// A run's confidences (`OUT/predictions/*.prob`), by file name, as bytes.
+pub fn confidences(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    prediction_files(dir, "prob")
+}
+
+/// The files `OUT/predictions/*.{extension}`, by file name, as bytes.
+fn prediction_files(dir: &Path, extension: &str) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir.join("predictions"))
         .unwrap()
-        .map(|e| {
-            let e = e.unwrap();
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == extension))
+        .map(|p| {
             (
-                e.file_name().into_string().unwrap(),
-                std::fs::read(e.path()).unwrap(),
+                p.file_name().unwrap().to_str().unwrap().to_string(),
+                std::fs::read(&p).unwrap(),
             )
         })
         .collect()

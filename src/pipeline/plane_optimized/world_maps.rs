@@ -35,19 +35,36 @@ impl AroundCornerMap {
         }
     }
 
-    /// Add a frame with its pose and classes.
-    pub fn add(&mut self, frame: &Frame, pose: &Isometry3<f64>, classes: &[Class]) {
+    /// Add a frame with its pose, classes and their confidences (one per
+    /// point, or empty where the method does not say: the map's
+    /// `confidence` is then NaN).
+    pub fn add(
+        &mut self,
+        frame: &Frame,
+        pose: &Isometry3<f64>,
+        classes: &[Class],
+        confidence: &[f32],
+    ) {
         let planes = planes_seen_from(&self.planes, pose);
         let mirrored = mirror_reflections(frame, classes, &planes, self.hull_margin);
         let (r, t) = rotation_translation(pose);
-        for (pt, &class) in frame.points.iter().zip(classes) {
+        for (i, (pt, &class)) in frame.points.iter().zip(classes).enumerate() {
             if matches!(class, Class::Normal | Class::Glass | Class::Obstacle) {
-                self.thin
-                    .offer(Point3::from(r * pt.position().coords + t), class, false);
+                self.thin.offer(
+                    Point3::from(r * pt.position().coords + t),
+                    class,
+                    false,
+                    confidence_at(confidence, i),
+                );
             }
         }
-        for (_, q) in mirrored {
-            self.thin.offer(pose * q, Class::Reflection, true);
+        for (i, q) in mirrored {
+            self.thin.offer(
+                pose * q,
+                Class::Reflection,
+                true,
+                confidence_at(confidence, i),
+            );
         }
     }
 
@@ -73,11 +90,24 @@ impl MeasuredMap {
         }
     }
 
-    /// Add a frame with its pose and classes.
-    pub fn add(&mut self, frame: &Frame, pose: &Isometry3<f64>, classes: &[Class]) {
-        for (pt, &class) in frame.points.iter().zip(classes) {
+    /// Add a frame with its pose, classes and their confidences (one per
+    /// point, or empty where the method does not say: the map's
+    /// `confidence` is then NaN).
+    pub fn add(
+        &mut self,
+        frame: &Frame,
+        pose: &Isometry3<f64>,
+        classes: &[Class],
+        confidence: &[f32],
+    ) {
+        for (i, (pt, &class)) in frame.points.iter().zip(classes).enumerate() {
             if class != Class::Unclassified {
-                self.thin.offer(pose * pt.position(), class, false);
+                self.thin.offer(
+                    pose * pt.position(),
+                    class,
+                    false,
+                    confidence_at(confidence, i),
+                );
             }
         }
     }
@@ -88,7 +118,8 @@ impl MeasuredMap {
     }
 }
 
-/// [`AroundCornerMap`] of a sequence and its classes (empty without poses).
+/// [`AroundCornerMap`] of a sequence and its classes (empty without poses;
+/// no confidences, the map's are NaN).
 pub fn around_corner_map(
     sequence: &Sequence,
     classes: &[Vec<Class>],
@@ -101,12 +132,13 @@ pub fn around_corner_map(
     };
     let mut map = AroundCornerMap::new(map_planes, hull_margin, voxel);
     for k in 0..sequence.len().min(classes.len()) {
-        map.add(&*sequence.frame(k)?, &poses[k], &classes[k]);
+        map.add(&*sequence.frame(k)?, &poses[k], &classes[k], &[]);
     }
     Ok(map.into_points())
 }
 
-/// [`MeasuredMap`] of a sequence and its classes (empty without poses).
+/// [`MeasuredMap`] of a sequence and its classes (empty without poses; no
+/// confidences, the map's are NaN).
 pub fn measured_map(
     sequence: &Sequence,
     classes: &[Vec<Class>],
@@ -117,9 +149,14 @@ pub fn measured_map(
     };
     let mut map = MeasuredMap::new(voxel);
     for k in 0..sequence.len().min(classes.len()) {
-        map.add(&*sequence.frame(k)?, &poses[k], &classes[k]);
+        map.add(&*sequence.frame(k)?, &poses[k], &classes[k], &[]);
     }
     Ok(map.into_points())
+}
+
+/// The confidence of point `i`, NaN when unknown.
+fn confidence_at(confidence: &[f32], i: usize) -> f32 {
+    confidence.get(i).copied().unwrap_or(f32::NAN)
 }
 
 /// A pose as rotation matrix and translation: applied to every point of a
@@ -131,8 +168,8 @@ pub(super) fn rotation_translation(pose: &Isometry3<f64>) -> (Matrix3<f64>, Vect
     )
 }
 
-/// Keeps the first point offered per (voxel, class, mirrored); a voxel of 0
-/// (or less) keeps every point.
+/// Keeps the first point offered per (voxel, class, mirrored), with that
+/// point's confidence; a voxel of 0 (or less) keeps every point.
 struct Thinning {
     seen: Option<VoxelSet>,
     kept: Vec<MapPoint>,
@@ -146,8 +183,10 @@ impl Thinning {
         }
     }
 
+    /// Offer a point; kept (with its `confidence`) when it is the first of
+    /// its voxel, class and mirroring.
     #[inline]
-    fn offer(&mut self, p: Point3<f64>, class: Class, mirrored: bool) {
+    fn offer(&mut self, p: Point3<f64>, class: Class, mirrored: bool, confidence: f32) {
         let tag = (class.id() & 0x7) | (mirrored as u8) << 3;
         if self
             .seen
@@ -158,6 +197,7 @@ impl Thinning {
                 xyz: [p.x as f32, p.y as f32, p.z as f32],
                 class,
                 mirrored,
+                confidence,
             });
         }
     }

@@ -4,7 +4,7 @@
 //!
 //! | topic | schema | per frame |
 //! |---|---|---|
-//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32, `rule` u8 (which rule decided the class, `classify::Rule`) |
+//! | `/cloud` | `foxglove.PointCloud` | the frame in the `map` frame: `x y z` f32, `class` u8 (prediction id), `intensity` f32, `rule` u8 (which rule decided the class, `classify::Rule`), `confidence` f32 (the probability that the class is right; NaN where the method gives none) |
 //! | `/mirrored` | `foxglove.PointCloud` | the frame's reflections mirrored back through their plane (`map` frame) |
 //! | `/planes` | `foxglove.SceneUpdate` | each reflective landmark: translucent hull and panes, outlined |
 //! | `/tf` | `foxglove.FrameTransform` | `map` → `lidar` (the sensor pose) |
@@ -37,8 +37,8 @@ pub const WORLD_FRAME: &str = "map";
 /// The sensor frame's id in the recording.
 pub const SENSOR_FRAME: &str = "lidar";
 /// Bytes per point on `/cloud`: x, y, z (f32), class (u8), intensity (f32),
-/// rule (u8).
-const CLOUD_STRIDE: u32 = 18;
+/// rule (u8), confidence (f32).
+const CLOUD_STRIDE: u32 = 22;
 /// Bytes per point on `/mirrored`: x, y, z (f32), class (u8).
 const MIRRORED_STRIDE: u32 = 13;
 
@@ -53,6 +53,9 @@ pub struct McapRun<'a> {
     /// The rule that decided each point, per frame (an empty vector where
     /// unknown: the field then reads 0, "undecided").
     pub rules: &'a [Vec<Rule>],
+    /// The confidence of each point's class, per frame (an empty vector
+    /// where unknown: the field then reads NaN).
+    pub confidence: &'a [Vec<f32>],
     /// Reflective planes, world frame.
     pub planes: &'a [BoundedPlane],
     /// Hull margin used to mirror reflections back (metres).
@@ -88,8 +91,9 @@ pub fn write_run_mcap(path: &Path, run: &McapRun<'_>) -> Result<McapSummary> {
     let mut recorder = McapRecorder::create(path, run.planes, run.hull_margin)?;
     for (k, pose) in poses.iter().enumerate() {
         let rules = run.rules.get(k).map_or(&[][..], |r| r.as_slice());
+        let confidence = run.confidence.get(k).map_or(&[][..], |c| c.as_slice());
         let frame = run.sequence.frame(k)?;
-        recorder.add(&frame, pose, &run.classes[k], rules)?;
+        recorder.add(&frame, pose, &run.classes[k], rules, confidence)?;
     }
     recorder.finish()
 }
@@ -147,14 +151,16 @@ impl McapRecorder {
         })
     }
 
-    /// Record one frame with its pose (`T_world_sensor`), classes and the
-    /// rules that decided them (empty where unknown).
+    /// Record one frame with its pose (`T_world_sensor`), classes, the
+    /// rules that decided them and their confidences (either empty where
+    /// unknown).
     pub fn add(
         &mut self,
         frame: &Frame,
         pose: &Isometry3<f64>,
         classes: &[Class],
         rules: &[Rule],
+        confidence: &[f32],
     ) -> Result<()> {
         if classes.len() != frame.points.len() {
             return Err(Error::Input(format!(
@@ -170,13 +176,7 @@ impl McapRecorder {
         let t = stamp.total_nanos();
 
         // Classified cloud, world frame.
-        let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
-        for (i, (pt, class)) in frame.points.iter().zip(classes).enumerate() {
-            push_xyz(&mut data, &(pose * pt.position()));
-            data.push(class.id());
-            data.extend_from_slice(&pt.intensity.to_le_bytes());
-            data.push(rules.get(i).map_or(0, |r| r.id()));
-        }
+        let data = cloud_data(frame, &pose, classes, rules, confidence);
         self.summary.cloud_points += frame.points.len();
         self.cloud
             .log_with_time(&point_cloud(stamp, data, CLOUD_STRIDE, true), t);
@@ -295,6 +295,27 @@ impl Trail {
     }
 }
 
+/// The `/cloud` records of a frame (`CLOUD_STRIDE` bytes a point, fields
+/// as [`point_cloud`] names them): rule 0 and confidence NaN where unknown.
+fn cloud_data(
+    frame: &Frame,
+    pose: &Isometry3<f64>,
+    classes: &[Class],
+    rules: &[Rule],
+    confidence: &[f32],
+) -> Vec<u8> {
+    let mut data = Vec::with_capacity(frame.points.len() * CLOUD_STRIDE as usize);
+    for (i, (pt, class)) in frame.points.iter().zip(classes).enumerate() {
+        push_xyz(&mut data, &(pose * pt.position()));
+        data.push(class.id());
+        data.extend_from_slice(&pt.intensity.to_le_bytes());
+        data.push(rules.get(i).map_or(0, |r| r.id()));
+        let p = confidence.get(i).copied().unwrap_or(f32::NAN);
+        data.extend_from_slice(&p.to_le_bytes());
+    }
+    data
+}
+
 fn tmp_path(path: &Path) -> PathBuf {
     let mut name = path.file_name().unwrap_or_default().to_os_string();
     name.push(".tmp");
@@ -325,6 +346,7 @@ fn point_cloud(stamp: Timestamp, data: Vec<u8>, stride: u32, intensity: bool) ->
     if intensity {
         fields.push(field("intensity", 13, NumericType::Float32));
         fields.push(field("rule", 17, NumericType::Uint8));
+        fields.push(field("confidence", 18, NumericType::Float32));
     }
     PointCloud {
         timestamp: Some(stamp),
@@ -440,161 +462,4 @@ fn fan(vs: &[Point3<f64>], colour: Color) -> TriangleListPrimitive {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::cloud::{Frame, Point};
-    use crate::geometry::Plane;
-    use nalgebra::{Translation3, UnitQuaternion, Vector3 as V3};
-    use std::collections::BTreeMap;
-
-    fn sequence(frames: usize, points: usize) -> Sequence {
-        let frames: Vec<Frame> = (0..frames)
-            .map(|k| Frame {
-                name: format!("{k}"),
-                stamp: 100.0 + k as f64 * 0.1,
-                points: (0..points)
-                    .map(|i| Point {
-                        xyz: [3.0, i as f32 * 0.01, 0.0],
-                        intensity: 7.0,
-                        ..Default::default()
-                    })
-                    .collect(),
-                has_labels: false,
-                dropped_non_finite: 0,
-                intensity_scale: None,
-            })
-            .collect();
-        let poses = (0..frames.len())
-            .map(|k| {
-                Isometry3::from_parts(
-                    Translation3::new(k as f64, 0.0, 0.0),
-                    UnitQuaternion::from_scaled_axis(V3::new(0.0, 0.0, 0.1 * k as f64)),
-                )
-            })
-            .collect();
-        Sequence::from_frames(frames, Some(poses), "test").unwrap()
-    }
-
-    fn topic_counts(path: &Path) -> BTreeMap<String, usize> {
-        let bytes = std::fs::read(path).unwrap();
-        let mut counts = BTreeMap::new();
-        for m in ::mcap::MessageStream::new(&bytes).unwrap() {
-            *counts.entry(m.unwrap().channel.topic.clone()).or_default() += 1;
-        }
-        counts
-    }
-
-    /// Two recordings written at the same time do not mix messages: each
-    /// has a private context.
-    #[test]
-    fn concurrent_recordings_stay_separate() {
-        let dir = tempfile::tempdir().unwrap();
-        let plane = Plane::new(V3::new(-1.0, 0.0, 0.0), 5.0).unwrap();
-        let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
-        let bp =
-            BoundedPlane::from_points(plane, square.iter().map(|&(y, z)| Point3::new(5.0, y, z)));
-        let runs = [(2usize, 10usize), (5, 3)];
-        std::thread::scope(|s| {
-            for (i, &(n, p)) in runs.iter().enumerate() {
-                let path = dir.path().join(format!("{i}.mcap"));
-                let bp = bp.clone();
-                s.spawn(move || {
-                    let seq = sequence(n, p);
-                    let classes = vec![vec![Class::Normal; p]; n];
-                    let planes = [bp];
-                    let summary = write_run_mcap(
-                        &path,
-                        &McapRun {
-                            sequence: &seq,
-                            classes: &classes,
-                            rules: &[],
-                            planes: &planes,
-                            hull_margin: 0.0,
-                        },
-                    )
-                    .unwrap();
-                    assert_eq!(summary.frames, n);
-                    assert_eq!(summary.cloud_points, n * p);
-                });
-            }
-        });
-        for (i, &(n, _)) in runs.iter().enumerate() {
-            let counts = topic_counts(&dir.path().join(format!("{i}.mcap")));
-            assert_eq!(counts.len(), 5, "{counts:?}");
-            assert!(counts.values().all(|&c| c == n), "{counts:?}");
-        }
-        // Rewriting replaces the file.
-        let seq = sequence(1, 1);
-        let path = dir.path().join("0.mcap");
-        let classes = vec![vec![Class::Glass]];
-        write_run_mcap(
-            &path,
-            &McapRun {
-                sequence: &seq,
-                classes: &classes,
-                rules: &[],
-                planes: &[],
-                hull_margin: 0.0,
-            },
-        )
-        .unwrap();
-        assert!(topic_counts(&path).values().all(|&c| c == 1));
-    }
-
-    /// The trajectory shown stays bounded on long runs, keeps its first
-    /// and latest pose, and is the whole path on short ones.
-    #[test]
-    fn the_trail_is_bounded_and_ends_at_the_latest_pose() {
-        let pose = |k: usize| to_pose(&Isometry3::translation(k as f64, 0.0, 0.0));
-        let mut short = Trail::default();
-        for k in 0..100 {
-            short.push(pose(k));
-        }
-        assert_eq!(short.poses(), (0..100).map(pose).collect::<Vec<_>>());
-        let mut long = Trail::default();
-        for k in 0..20_000 {
-            long.push(pose(k));
-            assert!(long.poses().len() <= Trail::MAX + 1);
-        }
-        let shown = long.poses();
-        assert!(shown.len() >= Trail::MAX / 2, "{}", shown.len());
-        assert_eq!(shown.first(), Some(&pose(0)));
-        assert_eq!(shown.last(), Some(&pose(19_999)));
-    }
-
-    /// A recorder dropped before it finished leaves no file.
-    #[test]
-    fn an_unfinished_recording_leaves_no_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("run.mcap");
-        let seq = sequence(1, 3);
-        let mut recorder = McapRecorder::create(&path, &[], 0.0).unwrap();
-        let frame = seq.frame(0).unwrap();
-        recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 3], &[])
-            .unwrap();
-        assert!(recorder
-            .add(&frame, &Isometry3::identity(), &[Class::Normal; 2], &[])
-            .is_err());
-        drop(recorder);
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    }
-
-    #[test]
-    fn mismatched_classes_are_an_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let seq = sequence(2, 2);
-        let err = write_run_mcap(
-            &dir.path().join("x.mcap"),
-            &McapRun {
-                sequence: &seq,
-                classes: &[],
-                rules: &[],
-                planes: &[],
-                hull_margin: 0.0,
-            },
-        );
-        assert!(err.is_err());
-        assert!(!dir.path().join("x.mcap").exists());
-    }
-}
+mod tests;
