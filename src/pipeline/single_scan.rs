@@ -114,7 +114,7 @@ pub fn run_single_scan_into(
             name: frame.name.clone(),
             classes: decisions.classes,
             rules: decisions.rules,
-                confidence: decisions.confidence,
+            confidence: decisions.confidence,
             planes: detection.planes.len(),
             candidates: detection.candidates.len(),
             set_aside: sequence.set_aside(k, frame)?,
