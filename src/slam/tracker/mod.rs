@@ -121,6 +121,8 @@ pub const WINDOW_EVERY: usize = 5;
 /// Frame-to-frame matching (the paper's thresholds): normals within
 /// acos 0.8 (37 deg), offsets within 0.1 m, centroids within 0.7071 m,
 /// hull areas within a factor 1.5.
+// 0.7071 as the paper's code writes it, not 1/√2: the results depend on it.
+#[allow(clippy::approx_constant)]
 pub const FRAME_MATCHING: MatchCriteria = MatchCriteria {
     min_normal_cos: 0.8,
     max_offset: 0.1,
