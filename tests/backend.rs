@@ -346,13 +346,37 @@ fn average_backend_keeps_poses_and_moves_planes() {
 
 #[test]
 fn backend_params_parse_as_a_toml_section() {
-    let p: BackendParams = toml::from_str(
-        "name = \"gn\"\nrobust = { kind = \"huber\", k = 2.0 }\n[solver]\nmax_iterations = 7\n",
-    )
-    .unwrap();
+    // A complete section, as a configuration file layered over a built-in
+    // gives it (the defaults are configs/default.toml's, not the struct's).
+    let toml::Value::Table(mut section) = toml::Value::try_from(BackendParams::default()).unwrap()
+    else {
+        panic!("a table");
+    };
+    section.insert("name".into(), "gn".into());
+    section.insert(
+        "robust".into(),
+        toml::Value::Table(toml::from_str("kind = \"huber\"\nk = 2.0").unwrap()),
+    );
+    section["solver"]
+        .as_table_mut()
+        .unwrap()
+        .insert("relative_tolerance".into(), 1e-7.into());
+    let p: BackendParams = toml::Value::Table(section.clone()).try_into().unwrap();
     assert_eq!(p.name, BackendName::Gn);
-    assert_eq!(p.solver.max_iterations, 7);
+    assert_eq!(p.solver.relative_tolerance, 1e-7);
     assert_eq!(p.robust, RobustKernel::Huber { k: 2.0 });
-    assert!(toml::from_str::<BackendParams>("nmae = \"gn\"").is_err());
-    assert!(toml::from_str::<BackendParams>("name = \"ceres\"").is_err());
+    let with = |key: &str, value: toml::Value| {
+        let mut s = section.clone();
+        s.insert(key.into(), value);
+        toml::Value::Table(s).try_into::<BackendParams>()
+    };
+    assert!(with("nmae", "gn".into()).is_err());
+    assert!(with("name", "ceres".into()).is_err());
+    // The iteration cap is a constant now, no key.
+    let mut s = section.clone();
+    s["solver"]
+        .as_table_mut()
+        .unwrap()
+        .insert("max_iterations".into(), 7.into());
+    assert!(toml::Value::Table(s).try_into::<BackendParams>().is_err());
 }

@@ -211,15 +211,15 @@ fn an_error_quotes_only_an_excerpt_of_bad_input() {
 }
 
 /// Weaker cases: configuration values no run can use are refused by
-/// `specular config` (`frame_cache_mb = nan` or `-1`, an unknown sensor,
-/// a non-positive pose bound); the old code accepted them.
+/// `specular config` (`frame_cache_mb = nan` or `-1`, an unknown sensor);
+/// the old code accepted them. (The pose bounds are constants now,
+/// `io::frames::MAX_POSE_TRANSLATION` and `MAX_SPEED`.)
 #[test]
 fn unusable_configuration_values_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     for (text, key) in [
         ("[input]\nframe_cache_mb = nan\n", "frame_cache_mb"),
         ("[input]\nframe_cache_mb = -1.0\n", "frame_cache_mb"),
-        ("[input]\nmax_speed = 0.0\n", "max_speed"),
         ("sensor = \"nonexistent\"\n", "nonexistent"),
     ] {
         let file = tmp.path().join("c.toml");

@@ -65,8 +65,10 @@ fn graph_solve_writes_the_solution_it_reports() {
     );
     assert!(cost < exported.cost(&exported.values).unwrap());
 
-    // It is exactly what the same back-end finds through the library.
+    // It is exactly what the same back-end finds through the library
+    // (with graph solve's initial damping, 1e-8).
     let mut params = BackendParams::default();
+    params.solver.initial_lambda = 1e-8;
     params.solver.max_iterations = 100;
     params.solver.relative_tolerance = 1e-5;
     params.solver.absolute_tolerance = 1e-5;

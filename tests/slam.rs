@@ -273,7 +273,8 @@ fn the_back_end_is_not_worse_than_tracking_on_the_corridor_loop() {
         e.summary(),
         alone.summary()
     );
-    config.backend.point_anchor_translation_sigma = 0.0;
+    config.backend.point_anchor_translation_sigma = None;
+    config.backend.point_anchor_rotation_sigma = None;
     let without = specular::pipeline::optimize_tracked(tracked, &config).unwrap();
     let e_off = trajectory_error(&without.poses, &truth, 1.0).unwrap();
     eprintln!(

@@ -63,9 +63,9 @@ pub enum PlaneFactorKind {
     PointToPlane,
 }
 
-/// Back-end configuration (the future `[backend]` section).
+/// Back-end configuration (the `[backend]` section).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct BackendParams {
     /// Which back-end.
     pub name: BackendName,
@@ -87,55 +87,59 @@ pub struct BackendParams {
     pub odometry_rotation_sigma: f64,
     /// An observation whose points lie farther than this (rms) from its
     /// landmark's plane at the tracked pose is a wrong association and is
-    /// left out of the graph, m (0: every observation is kept). One such
-    /// observation of a large plane outweighs hundreds of frames of
-    /// odometry.
-    pub max_observation_rms: f64,
+    /// left out of the graph, m (absent: every observation is kept, the
+    /// paper). One such observation of a large plane outweighs hundreds of
+    /// frames of odometry.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_observation_rms: Option<f64>,
     /// Where tracking's point term fixed directions the planes left free,
     /// a relative-pose factor along them ties the frame to the frame whose
     /// points it was registered against, with this translation noise, m
-    /// (0: no such factors). Without them the back-end sees those
-    /// directions only through the frame-to-frame odometry, whose error
-    /// accumulates, and loses what the local point map knew.
-    pub point_anchor_translation_sigma: f64,
+    /// (absent, with `point_anchor_rotation_sigma`: no such factors).
+    /// Without them the back-end sees those directions only through the
+    /// frame-to-frame odometry, whose error accumulates, and loses what the
+    /// local point map knew.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_anchor_translation_sigma: Option<f64>,
     /// ... and this rotation noise, radians.
-    pub point_anchor_rotation_sigma: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_anchor_rotation_sigma: Option<f64>,
     /// Along the directions a frame-to-frame registration left free (its
     /// planes did not observe them) and the points did not fix, the
     /// odometry is the motion model's prediction, not a measurement: its
     /// factor carries this translation noise there instead of
-    /// `odometry_translation_sigma`, m (0: the odometry's noise in every
-    /// direction). A loop or a point anchor can then move those directions
-    /// where the motion model put them.
-    pub odometry_free_translation_sigma: f64,
+    /// `odometry_translation_sigma`, m (absent, with
+    /// `odometry_free_rotation_sigma`: the odometry's noise in every
+    /// direction, as in both built-in configurations). A loop or a point
+    /// anchor can then move those directions where the motion model put
+    /// them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub odometry_free_translation_sigma: Option<f64>,
     /// ... and this rotation noise, radians.
-    pub odometry_free_rotation_sigma: f64,
-    /// `average`: weight of a landmark after its first observation (paper 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub odometry_free_rotation_sigma: Option<f64>,
+    /// `average`: weight of a landmark after its first observation (the
+    /// paper's 3, [`crate::map::merge::SECOND_WEIGHT`]; no key).
+    #[serde(skip, default = "average_second_weight")]
     pub average_second_weight: f64,
-    /// `average`: cap on a landmark's weight (paper 10).
+    /// `average`: cap on a landmark's weight (the paper's 10,
+    /// [`crate::map::merge::MAX_WEIGHT`]; no key).
+    #[serde(skip, default = "average_max_weight")]
     pub average_max_weight: f64,
 }
 
+fn average_second_weight() -> f64 {
+    crate::map::merge::SECOND_WEIGHT
+}
+
+fn average_max_weight() -> f64 {
+    crate::map::merge::MAX_WEIGHT
+}
+
 impl Default for BackendParams {
+    /// `[backend]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            name: BackendName::Lm,
-            solver: SolverParams::default(),
-            robust: RobustKernel::Huber { k: 1.345 },
-            plane_factor: PlaneFactorKind::PointToPlane,
-            plane_normal_sigma: 0.01,
-            plane_offset_sigma: 0.02,
-            point_sigma: 0.1,
-            odometry_translation_sigma: 0.05,
-            odometry_rotation_sigma: 0.01,
-            max_observation_rms: 0.0,
-            point_anchor_translation_sigma: 0.05,
-            point_anchor_rotation_sigma: 0.01,
-            odometry_free_translation_sigma: 0.0,
-            odometry_free_rotation_sigma: 0.0,
-            average_second_weight: 3.0,
-            average_max_weight: 10.0,
-        }
+        crate::config::default_section("backend")
     }
 }
 
@@ -181,18 +185,33 @@ impl BackendParams {
                 "odometry_free_rotation_sigma",
                 self.odometry_free_rotation_sigma,
             ),
+            ("max_observation_rms", self.max_observation_rms),
         ] {
-            if !(v >= 0.0) || !v.is_finite() {
+            if let Some(v) = v.filter(|v| !(*v > 0.0) || !v.is_finite()) {
                 return Err(Error::Config(format!(
-                    "backend.{name} must be finite and ≥ 0 (0: off), got {v}"
+                    "backend.{name} must be finite and positive (leave it out to switch it off), got {v}"
                 )));
             }
         }
-        if !(self.max_observation_rms >= 0.0) || !self.max_observation_rms.is_finite() {
-            return Err(Error::Config(format!(
-                "backend.max_observation_rms must be finite and ≥ 0, got {}",
-                self.max_observation_rms
-            )));
+        for (a, b, va, vb) in [
+            (
+                "point_anchor_translation_sigma",
+                "point_anchor_rotation_sigma",
+                self.point_anchor_translation_sigma,
+                self.point_anchor_rotation_sigma,
+            ),
+            (
+                "odometry_free_translation_sigma",
+                "odometry_free_rotation_sigma",
+                self.odometry_free_translation_sigma,
+                self.odometry_free_rotation_sigma,
+            ),
+        ] {
+            if va.is_some() != vb.is_some() {
+                return Err(Error::Config(format!(
+                    "backend.{a} and backend.{b} are given together or not at all"
+                )));
+            }
         }
         let s = &self.solver;
         if s.max_iterations == 0 {

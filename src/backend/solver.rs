@@ -28,38 +28,92 @@ use crate::{Error, Result};
 
 /// Stopping rules and damping of the iterative solvers.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct SolverParams {
     /// Maximum number of linear solves.
+    ///
+    /// [`MAX_ITERATIONS`] in every configuration (no key).
+    #[serde(skip, default = "max_iterations")]
     pub max_iterations: usize,
-    /// Stop when the cost decrease is below this fraction of the cost.
+    /// Stop when the cost decrease is below this fraction of the cost
+    /// (dimensionless).
     pub relative_tolerance: f64,
-    /// Stop when the cost decrease is below this absolute value.
+    /// Stop when the cost decrease is below this absolute value (the cost
+    /// is a sum of squared whitened residuals: dimensionless).
     pub absolute_tolerance: f64,
     /// Stop when `‖δ‖∞` is below this.
+    ///
+    /// [`STEP_TOLERANCE`] in every configuration (no key).
+    #[serde(skip, default = "step_tolerance")]
     pub step_tolerance: f64,
     /// Initial Levenberg–Marquardt damping `λ`.
+    ///
+    /// [`INITIAL_LAMBDA`] in every configuration (no key).
+    #[serde(skip, default = "initial_lambda")]
     pub initial_lambda: f64,
     /// Give up when `λ` exceeds this (no descent found).
+    ///
+    /// [`MAX_LAMBDA`] in every configuration (no key).
+    #[serde(skip, default = "max_lambda")]
     pub max_lambda: f64,
     /// Factor applied to `λ` after an accepted step (in `(0, 1)`).
+    ///
+    /// [`LAMBDA_DECREASE`] in every configuration (no key).
+    #[serde(skip, default = "lambda_decrease")]
     pub lambda_decrease: f64,
     /// Relative eigenvalue threshold of the observability report.
+    ///
+    /// [`UNOBSERVABLE_THRESHOLD`] in every configuration (no key).
+    #[serde(skip, default = "unobservable_threshold")]
     pub unobservable_threshold: f64,
 }
 
+/// Linear solves of an iterative back-end at most.
+pub const MAX_ITERATIONS: usize = 100;
+
+fn max_iterations() -> usize {
+    MAX_ITERATIONS
+}
+
+/// An iterative back-end stops when `‖δ‖∞` (m and rad) is below this.
+pub const STEP_TOLERANCE: f64 = 1e-10;
+
+fn step_tolerance() -> f64 {
+    STEP_TOLERANCE
+}
+
+/// Initial Levenberg–Marquardt damping `λ`.
+pub const INITIAL_LAMBDA: f64 = 1e-5;
+
+fn initial_lambda() -> f64 {
+    INITIAL_LAMBDA
+}
+
+/// Levenberg–Marquardt gives up when `λ` exceeds this (no descent found).
+pub const MAX_LAMBDA: f64 = 1e10;
+
+fn max_lambda() -> f64 {
+    MAX_LAMBDA
+}
+
+/// Factor applied to `λ` after an accepted step (in `(0, 1)`).
+pub const LAMBDA_DECREASE: f64 = 0.1;
+
+fn lambda_decrease() -> f64 {
+    LAMBDA_DECREASE
+}
+
+/// Relative eigenvalue threshold of the observability report.
+pub const UNOBSERVABLE_THRESHOLD: f64 = 1e-6;
+
+fn unobservable_threshold() -> f64 {
+    UNOBSERVABLE_THRESHOLD
+}
+
 impl Default for SolverParams {
+    /// `[backend.solver]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            max_iterations: 100,
-            relative_tolerance: 1e-5,
-            absolute_tolerance: 1e-5,
-            step_tolerance: 1e-10,
-            initial_lambda: 1e-8,
-            max_lambda: 1e10,
-            lambda_decrease: 0.1,
-            unobservable_threshold: 1e-6,
-        }
+        crate::config::default_section("backend.solver")
     }
 }
 

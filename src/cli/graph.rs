@@ -163,6 +163,7 @@ pub fn run(args: GraphArgs) -> Result<()> {
                 BackendArg::Factrs => BackendName::Factrs,
             };
             let mut params = BackendParams::default();
+            params.solver.initial_lambda = SOLVE_INITIAL_LAMBDA;
             params.solver.max_iterations = max_iterations;
             params.solver.relative_tolerance = tolerance;
             params.solver.absolute_tolerance = tolerance;
@@ -218,6 +219,12 @@ pub fn run(args: GraphArgs) -> Result<()> {
 
 /// The timestamps of a TUM file in file order, one per pose of a graph of
 /// `poses` poses.
+/// `graph solve`'s initial Levenberg–Marquardt damping: the tool solves
+/// graph files with its own settings (`--max-iterations`, `--tolerance`),
+/// and has started at this λ since it was written (the pipeline's is
+/// `backend::solver::INITIAL_LAMBDA`).
+const SOLVE_INITIAL_LAMBDA: f64 = 1e-8;
+
 fn pose_stamps(path: &Path, poses: usize) -> Result<Vec<f64>> {
     let stamps: Vec<f64> = io::read_tum(path)?.iter().map(|p| p.stamp).collect();
     if stamps.len() != poses {

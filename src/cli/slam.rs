@@ -577,7 +577,7 @@ impl InputReport {
                 .map(|v| v["frame"].as_str().unwrap_or("?").to_string())
                 .collect();
             out.push(format!(
-                "warning: implausible motion (a jump past [slam.motion] implausible_jump or implausible_turn_deg) on {} frame{}: {}",
+                "warning: implausible motion (a jump past slam::motion::IMPLAUSIBLE_JUMP m or IMPLAUSIBLE_TURN_DEG deg) on {} frame{}: {}",
                 names.len(),
                 if names.len() == 1 { "" } else { "s" },
                 list(&names)

@@ -4,10 +4,7 @@
 /// Tables whose tag key selects a variant with its own keys (an internally
 /// tagged enum): a file that changes the tag replaces the whole table instead
 /// of merging into it, so the other variant's keys are not carried over.
-const TAGGED_TABLES: &[(&str, &str)] = &[
-    ("backend.robust", "kind"),
-    ("slam.loop_closure.robust", "kind"),
-];
+const TAGGED_TABLES: &[(&str, &str)] = &[("backend.robust", "kind")];
 
 /// How a configuration file was layered: the built-in under it and the keys
 /// it set, so a user can see what a file changes (`specular config`).

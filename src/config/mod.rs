@@ -10,9 +10,11 @@
 //! replaces the built-in's value), or over `configs/paper.toml` when it says
 //! `extends = "paper"` at the top. An empty file is exactly the default
 //! configuration. Unknown keys are errors naming the file, the key path and
-//! the closest valid key. [`Config::default`] is `configs/default.toml`; the
-//! sections' own `Default` impls serve unit tests and are never what a
-//! missing key falls back to.
+//! the closest valid key. [`Config::default`] is `configs/default.toml`, and
+//! so is every section's `Default` (its table of that file, read by
+//! [`default_section`]); numerical-method constants nobody should tune are
+//! `const`s beside the code that uses them, and the sensor's own constants
+//! are in its model (`configs/sensors/*.toml`).
 //!
 //! Each stage owns its plain parameter struct, beside the code that reads
 //! it ([`DetectorParams`] in `reflect`, [`MapParams`] in `map`,
@@ -121,6 +123,42 @@ const DEFAULT_BASE: &str = "default";
 /// over.
 const EXTENDS: &str = "extends";
 
+/// Optional keys (an `Option` each: absent is off) that `configs/default.toml`
+/// leaves out, with a value of their type: valid in a configuration file all
+/// the same.
+const OPTIONAL_KEYS: &[(&str, f64)] = &[
+    ("slam.window", 20.0),
+    ("slam.keyframe_move", 0.2),
+    ("slam.keyframe_turn_deg", 5.0),
+    ("backend.odometry_free_translation_sigma", 0.5),
+    ("backend.odometry_free_rotation_sigma", 0.1),
+];
+
+/// The keys a configuration file may name: the default file's and the
+/// optional ones it leaves out.
+fn known_keys() -> toml::Table {
+    let mut known = builtin_table(DEFAULT_BASE);
+    for (path, value) in OPTIONAL_KEYS {
+        let mut table = &mut known;
+        let mut keys: Vec<&str> = path.split('.').collect();
+        let leaf = keys.pop().expect("a dotted key");
+        for key in keys {
+            table = table
+                .entry(key)
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                .as_table_mut()
+                .expect("optional keys lie in tables");
+        }
+        let value = if value.fract() == 0.0 {
+            toml::Value::Integer(*value as i64)
+        } else {
+            toml::Value::Float(*value)
+        };
+        table.insert(leaf.into(), value);
+    }
+    known
+}
+
 impl Config {
     /// Names of the built-in configurations.
     pub fn builtin_names() -> Vec<&'static str> {
@@ -207,7 +245,7 @@ impl Config {
         };
         // Known keys: the default configuration's, and `extends` (already
         // taken out of the file) so that a misspelling of it is suggested.
-        let mut known = builtin_table(DEFAULT_BASE);
+        let mut known = known_keys();
         known.insert(EXTENDS.into(), DEFAULT_BASE.into());
         let unknown = unknown_keys(&file, &known, "");
         if !unknown.is_empty() {
@@ -229,6 +267,28 @@ impl Config {
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot serialise: {e}\n"))
     }
+}
+
+/// The section of `configs/default.toml` at a dotted path (`""` for the
+/// whole file, `"slam.points"`), parsed: what the `Default` of every
+/// section's struct returns, so the file is the only source of defaults.
+///
+/// # Panics
+///
+/// If the embedded default file lacks the section or it does not parse as
+/// `T` (a test covers every section).
+pub fn default_section<T: serde::de::DeserializeOwned>(path: &str) -> T {
+    static TABLE: std::sync::OnceLock<toml::Table> = std::sync::OnceLock::new();
+    let mut table = TABLE.get_or_init(|| builtin_table(DEFAULT_BASE));
+    for key in path.split('.').filter(|k| !k.is_empty()) {
+        table = match table.get(key) {
+            Some(toml::Value::Table(t)) => t,
+            _ => panic!("configs/default.toml has no section [{path}]"),
+        };
+    }
+    toml::Value::Table(table.clone())
+        .try_into()
+        .unwrap_or_else(|e| panic!("configs/default.toml [{path}]: {e}"))
 }
 
 /// A built-in configuration as a TOML table.

@@ -31,16 +31,8 @@ impl Config {
                 "slam.rejector.inlier_offset",
                 self.slam.rejector.inlier_offset,
             ),
-            (
-                "slam.frame_matching.max_centroid_distance",
-                self.slam.frame_matching.max_centroid_distance,
-            ),
             ("slam.rpe_segment", self.slam.rpe_segment),
-            (
-                "input.max_pose_translation",
-                self.input.max_pose_translation,
-            ),
-            ("input.max_speed", self.input.max_speed),
+            ("slam.gap_ratio", self.slam.gap_ratio),
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
@@ -59,16 +51,28 @@ impl Config {
                 "input.frame_cache_mb must be a number of megabytes >= 0 (0: keep no frame), got {cache}"
             ));
         }
-        if !(d.ransac.probability > 0.0 && d.ransac.probability < 1.0) {
-            return Err(format!(
-                "detector.ransac.probability must be in (0, 1), got {}",
-                d.ransac.probability
-            ));
+        if d.max_planes == 0 {
+            return Err("detector.max_planes must be at least 1".into());
         }
-        if d.ransac.max_iterations == 0 || d.max_planes == 0 {
-            return Err(
-                "detector.ransac.max_iterations and detector.max_planes must be at least 1".into(),
-            );
+        for (name, v) in [
+            ("extractor.reflective_link", self.extractor.reflective_link),
+            ("slam.keyframe_move", self.slam.keyframe_move),
+            ("slam.keyframe_turn_deg", self.slam.keyframe_turn_deg),
+            (
+                "backend.max_observation_rms",
+                self.backend.max_observation_rms,
+            ),
+        ] {
+            if let Some(v) = v.filter(|v| !(*v > 0.0 && v.is_finite())) {
+                return Err(format!(
+                    "{name} must be positive (leave it out to switch it off), got {v}"
+                ));
+            }
+        }
+        if let Some(w) = self.slam.window.filter(|w| *w < 2) {
+            return Err(format!(
+                "slam.window must be at least 2 frames (leave it out for no window), got {w}"
+            ));
         }
         for (name, dec) in [
             ("single_scan", &self.single_scan.decision),
@@ -80,42 +84,15 @@ impl Config {
                 ));
             }
         }
-        for (name, r) in [
-            ("extractor.ransac", &self.extractor.ransac),
-            ("extractor.ground.ransac", &self.extractor.ground.ransac),
-        ] {
-            if !(r.probability > 0.0 && r.probability < 1.0) || r.max_iterations == 0 {
-                return Err(format!(
-                    "{name}: probability must be in (0, 1) and max_iterations at least 1"
-                ));
-            }
-        }
         if self.extractor.min_points < 3 {
             return Err("extractor.min_points must be at least 3".into());
         }
-        for (name, v) in [
-            (
-                "slam.frame_matching.min_normal_cos",
-                self.slam.frame_matching.min_normal_cos,
-            ),
-            (
-                "slam.map_matching.min_normal_cos",
-                self.slam.map_matching.min_normal_cos,
-            ),
-            (
-                "slam.map_matching.min_overlap",
-                self.slam.map_matching.min_overlap,
-            ),
-        ] {
-            if !(v > 0.0 && v <= 1.0) {
-                return Err(format!("{name} must be in (0, 1], got {v}"));
+        if let Some(parallel) = self.slam.points.parallel_reflective_deg {
+            if !(parallel > 0.0 && parallel < 90.0) {
+                return Err(format!(
+                    "slam.points.parallel_reflective_deg must be in (0, 90) (leave it out for none), got {parallel}"
+                ));
             }
-        }
-        let parallel = self.slam.points.parallel_reflective_deg;
-        if !(0.0..90.0).contains(&parallel) {
-            return Err(format!(
-                "slam.points.parallel_reflective_deg must be in [0, 90), got {parallel}"
-            ));
         }
         let gain = self.slam.motion.free_direction_gain;
         if !(0.0..=1.0).contains(&gain) {

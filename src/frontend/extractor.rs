@@ -37,9 +37,10 @@ impl ExtractorName {
 /// Plane-extraction settings (`[extractor]`); the paper's values are the
 /// defaults where it gives them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct ExtractorParams {
-    /// The extractor.
+    /// The extractor: region growing, the only one (no key).
+    #[serde(skip, default = "region_growing")]
     pub name: ExtractorName,
     /// Points more than this far behind a detected reflective plane, seen
     /// through its boundary, are removed before extraction, m.
@@ -50,45 +51,78 @@ pub struct ExtractorParams {
     pub region: RegionParams,
     /// The ground plane, fitted first.
     pub ground: GroundParams,
-    /// RANSAC per segment.
+    /// RANSAC per segment: the inlier distance (`[extractor.ransac]
+    /// distance`, m) is the only key, the rest [`RANSAC`]'s.
+    #[serde(
+        serialize_with = "crate::geometry::fit::serialize_distance",
+        deserialize_with = "deserialize_ransac"
+    )]
     pub ransac: RansacParams,
-    /// At most this many ordinary planes per frame (paper: 25).
+    /// At most this many ordinary planes per frame: [`MAX_PLANES`].
+    #[serde(skip, default = "max_planes")]
     pub max_planes: usize,
-    /// A plane needs at least this many inliers (paper: 200).
+    /// A plane needs at least this many inliers (paper: 200), points.
     pub min_points: usize,
     /// A plane needs at least this hull area, m² (paper: 0.3).
     pub min_area: f64,
-    /// A plane sparser than this many inliers per m² (paper: 100) ...
+    /// A plane sparser than this many inliers per m²: [`MIN_DENSITY`] ...
+    #[serde(skip, default = "min_density")]
     pub min_density: f64,
-    /// ... needs at least this many inliers (paper: 500).
+    /// ... needs at least this many inliers: [`SPARSE_MIN_POINTS`].
+    #[serde(skip, default = "sparse_min_points")]
     pub sparse_min_points: usize,
     /// Reflective planes enter registration as their largest patch of
     /// inliers linked within this distance in the plane, m (see
-    /// [`reflective_planes`](super::reflective_planes)).
-    pub reflective_link: f64,
+    /// [`reflective_planes`](super::reflective_planes)); absent: the
+    /// detector's plane as it is (the paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflective_link: Option<f64>,
+}
+
+/// RANSAC per segment but for the inlier distance (a key): at most 100
+/// iterations, stopping once an outlier-free sample was drawn with
+/// probability 0.99, and a least-squares refit (the paper, after PCL).
+pub const RANSAC: RansacParams = RansacParams {
+    distance: 0.05,
+    max_iterations: 100,
+    probability: 0.99,
+    refit: true,
+};
+
+/// At most this many ordinary planes per frame (the paper: 25).
+pub const MAX_PLANES: usize = 25;
+
+/// A plane sparser than this many inliers per m² (the paper: 100) needs
+/// [`SPARSE_MIN_POINTS`] inliers.
+pub const MIN_DENSITY: f64 = 100.0;
+
+/// The inliers a sparse plane needs (the paper: 500).
+pub const SPARSE_MIN_POINTS: usize = 500;
+
+fn deserialize_ransac<'de, D: serde::Deserializer<'de>>(d: D) -> Result<RansacParams, D::Error> {
+    crate::geometry::fit::deserialize_distance(d, RANSAC)
+}
+
+fn region_growing() -> ExtractorName {
+    ExtractorName::RegionGrowing
+}
+
+fn max_planes() -> usize {
+    MAX_PLANES
+}
+
+fn min_density() -> f64 {
+    MIN_DENSITY
+}
+
+fn sparse_min_points() -> usize {
+    SPARSE_MIN_POINTS
 }
 
 impl Default for ExtractorParams {
+    /// `[extractor]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            name: ExtractorName::RegionGrowing,
-            behind_margin: 0.1,
-            normals: NormalParams::default(),
-            region: RegionParams::default(),
-            ground: GroundParams::default(),
-            ransac: RansacParams {
-                distance: 0.05,
-                max_iterations: 100,
-                probability: 0.99,
-                refit: true,
-            },
-            max_planes: 25,
-            min_points: 200,
-            min_area: 0.3,
-            min_density: 100.0,
-            sparse_min_points: 500,
-            reflective_link: 0.5,
-        }
+        crate::config::default_section("extractor")
     }
 }
 

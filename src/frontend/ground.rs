@@ -19,29 +19,45 @@ use crate::rng::SplitMix64;
 
 /// Ground-plane settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct GroundParams {
-    /// Fit a ground plane at all.
+    /// Fit a ground plane at all: yes in every configuration (no key).
+    #[serde(skip, default = "enabled")]
     pub enabled: bool,
     /// Largest angle between the ground normal (and the sampled cells'
     /// normals) and the sensor's z axis, degrees.
     pub max_tilt_deg: f64,
-    /// RANSAC settings of the ground fit.
+    /// RANSAC of the ground fit: the inlier distance (`[extractor.ground.ransac]
+    /// distance`, m) is the only key, the rest [`RANSAC`]'s.
+    #[serde(
+        serialize_with = "crate::geometry::fit::serialize_distance",
+        deserialize_with = "deserialize_ransac"
+    )]
     pub ransac: RansacParams,
 }
 
+/// The ground fit's RANSAC but for the inlier distance (a key): at most 200
+/// iterations, stopping once an outlier-free sample was drawn with
+/// probability 0.99, and a least-squares refit.
+pub const RANSAC: RansacParams = RansacParams {
+    distance: 0.05,
+    max_iterations: 200,
+    probability: 0.99,
+    refit: true,
+};
+
+fn deserialize_ransac<'de, D: serde::Deserializer<'de>>(d: D) -> Result<RansacParams, D::Error> {
+    crate::geometry::fit::deserialize_distance(d, RANSAC)
+}
+
+fn enabled() -> bool {
+    true
+}
+
 impl Default for GroundParams {
+    /// `[extractor.ground]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            enabled: true,
-            max_tilt_deg: 20.0,
-            ransac: RansacParams {
-                distance: 0.05,
-                max_iterations: 200,
-                probability: 0.99,
-                refit: true,
-            },
-        }
+        crate::config::default_section("extractor.ground")
     }
 }
 

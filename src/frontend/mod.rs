@@ -20,7 +20,7 @@
 //! The reflective planes of the [`ReflectiveDetector`](crate::reflect::ReflectiveDetector)
 //! join the frame's planes as their own kind ([`reflective`]: the largest
 //! connected patch of each plane's inliers, refitted).
-//! Extractors are selected by name (`[extractor] name = ...`) through the
+//! Extractors are selected by name ([`ExtractorParams::name`], no key) through the
 //! [`PlaneExtractor`] trait.
 
 pub mod extractor;
@@ -199,7 +199,7 @@ pub fn hull_of(mut uv: Vec<Point2<f64>>) -> ConvexPolygon {
 
 /// Extracts the ordinary planes (and the ground plane) of one frame.
 /// Implementations are selected by name in the configuration
-/// (`[extractor] name = ...`).
+/// ([`ExtractorParams::name`], no key).
 pub trait PlaneExtractor: Send + Sync {
     /// The name this extractor is selected by.
     fn name(&self) -> &'static str;

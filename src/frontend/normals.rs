@@ -15,24 +15,31 @@ use super::filter::CellCloud;
 
 /// Neighbourhood settings of the normal estimation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct NormalParams {
     /// A neighbour counts when it is within `max(max_gap, max_gap_ratio ·
     /// range)` metres of the cell's point: fixed part, m.
     pub max_gap: f64,
-    /// Range-proportional part of the gap (ring spacing grows with range).
+    /// Range-proportional part of the gap (ring spacing grows with range),
+    /// m per m of range.
     pub max_gap_ratio: f64,
-    /// Fewest points (the cell included) for a normal.
+    /// Fewest points (the cell included) for a normal: [`MIN_POINTS`].
+    #[serde(skip, default = "min_points")]
     pub min_points: usize,
 }
 
+/// Fewest points (the cell included) for a normal: the cell and three
+/// neighbours of its 3x3 block.
+pub const MIN_POINTS: usize = 4;
+
+fn min_points() -> usize {
+    MIN_POINTS
+}
+
 impl Default for NormalParams {
+    /// `[extractor.normals]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            max_gap: 0.25,
-            max_gap_ratio: 0.08,
-            min_points: 4,
-        }
+        crate::config::default_section("extractor.normals")
     }
 }
 

@@ -32,20 +32,20 @@ pub fn reflective_planes(
 ) -> Vec<FramePlane> {
     let mut out = Vec::new();
     for rp in &detection.planes {
-        if !(params.reflective_link > 0.0) {
+        let Some(link) = params.reflective_link else {
             // The detector's plane as it is (the paper).
             if let Some(fp) = as_detected(frame, rp) {
                 out.push(fp);
             }
             continue;
-        }
+        };
         let chart = &rp.bounded.chart;
         let uv: Vec<_> = rp
             .inliers
             .iter()
             .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
             .collect();
-        let labels = grid_components(&uv, params.reflective_link);
+        let labels = grid_components(&uv, link);
         let mut sizes = vec![0usize; labels.iter().max().map_or(0, |m| m + 1)];
         for &l in &labels {
             sizes[l] += 1;

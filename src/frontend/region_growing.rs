@@ -16,27 +16,25 @@ use super::normals::{NormalParams, OrganizedNormals};
 
 /// Region-growing thresholds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct RegionParams {
     /// Largest angle between neighbouring normals, degrees.
     pub max_angle_deg: f64,
     /// Largest distance of a neighbour from the current cell's tangent
     /// plane, m.
     pub max_plane_distance: f64,
-    /// Cells with a larger surface variation join but do not grow a segment.
+    /// Cells with a larger surface variation join but do not grow a
+    /// segment (the smallest eigenvalue's share of the neighbourhood's
+    /// covariance, dimensionless).
     pub max_curvature: f64,
     /// Segments with fewer cells are dropped.
     pub min_segment: usize,
 }
 
 impl Default for RegionParams {
+    /// `[extractor.region]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            max_angle_deg: 10.0,
-            max_plane_distance: 0.1,
-            max_curvature: 0.05,
-            min_segment: 200,
-        }
+        crate::config::default_section("extractor.region")
     }
 }
 

@@ -125,9 +125,10 @@ impl PlaneSums {
     }
 }
 
-/// RANSAC parameters (PCL names in brackets).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+/// RANSAC parameters (PCL names in brackets). A configuration section
+/// `[*.ransac]` states only `distance`; each stage's iterations, probability
+/// and refit are a constant beside it (e.g. `reflect::detector::RANSAC`).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RansacParams {
     /// Inlier distance threshold in metres (PCL: `distance_threshold`).
     pub distance: f64,
@@ -141,15 +142,37 @@ pub struct RansacParams {
     pub refit: bool,
 }
 
-impl Default for RansacParams {
-    fn default() -> Self {
-        Self {
-            distance: 0.07,
-            max_iterations: 400,
-            probability: 0.9,
-            refit: true,
-        }
+/// The keys of a `[*.ransac]` configuration section.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RansacKeys {
+    /// Inlier distance threshold, m.
+    distance: f64,
+}
+
+/// Serialise RANSAC parameters as their configuration section: the inlier
+/// distance alone (`serialize_with`).
+pub fn serialize_distance<S: serde::Serializer>(
+    params: &RansacParams,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    RansacKeys {
+        distance: params.distance,
     }
+    .serialize(serializer)
+}
+
+/// Read a `[*.ransac]` configuration section (its `distance`) into `stage`'s
+/// RANSAC parameters (for a stage's `deserialize_with`).
+pub fn deserialize_distance<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+    stage: RansacParams,
+) -> Result<RansacParams, D::Error> {
+    let keys = RansacKeys::deserialize(deserializer)?;
+    Ok(RansacParams {
+        distance: keys.distance,
+        ..stage
+    })
 }
 
 /// A fitted plane with the indices (into the input slice) of its inliers.

@@ -128,19 +128,25 @@ pub struct PoseMatching {
     /// they are at most this many seconds apart (0: never).
     pub max_gap: f64,
     /// Metres: a longer pose translation is an error naming its line
-    /// (`input.max_pose_translation`).
+    /// ([`MAX_POSE_TRANSLATION`] in a run).
     pub max_translation: f64,
     /// Metres per second: consecutive frames whose poses are farther apart
-    /// for the time between them are an error (`input.max_speed`).
+    /// for the time between them are an error ([`MAX_SPEED`] in a run).
     pub max_speed: f64,
 }
 
-/// The default of `input.max_pose_translation`, metres: no sensor is
-/// 100 km from its map origin.
-pub const DEFAULT_MAX_POSE_TRANSLATION: f64 = 1e5;
+/// Pose sanity, metres: a pose (`T_world_sensor`) whose translation is
+/// longer is an error naming the pose file and line. No LiDAR carried by a
+/// vehicle or a person is 100 km from its map origin; such a pose is
+/// corrupt or in the wrong unit, and would silently classify every point as
+/// Normal.
+pub const MAX_POSE_TRANSLATION: f64 = 1e5;
 
-/// The default of `input.max_speed`, metres per second (360 km/h).
-pub const DEFAULT_MAX_SPEED: f64 = 100.0;
+/// Pose sanity, metres per second: consecutive frames whose poses are
+/// farther apart than this times the time between their timestamps are an
+/// error naming the pose file and line (100 m/s, 360 km/h, is beyond any
+/// vehicle or person carrying a LiDAR).
+pub const MAX_SPEED: f64 = 100.0;
 
 impl From<f64> for PoseMatching {
     /// The nearest pose within `tolerance` seconds, no interpolation, the
@@ -149,8 +155,8 @@ impl From<f64> for PoseMatching {
         Self {
             tolerance,
             max_gap: 0.0,
-            max_translation: DEFAULT_MAX_POSE_TRANSLATION,
-            max_speed: DEFAULT_MAX_SPEED,
+            max_translation: MAX_POSE_TRANSLATION,
+            max_speed: MAX_SPEED,
         }
     }
 }
@@ -354,7 +360,7 @@ fn check_translation(
         return Err(Error::format(
             path,
             format!(
-                "line {line}: the pose is {t:.3e} m from the origin, beyond input.max_pose_translation ({max_translation} m): not a sensor pose (a corrupt number or a wrong unit?)"
+                "line {line}: the pose is {t:.3e} m from the origin, beyond the pose sanity bound max_pose_translation ({max_translation} m): not a sensor pose (a corrupt number or a wrong unit?)"
             ),
         ));
     }
@@ -379,7 +385,7 @@ fn check_speed(
             return Err(Error::format(
                 path,
                 format!(
-                    "line {}: the poses of frames {} and {} are {d:.3} m apart in {} s ({:.1} m/s), faster than input.max_speed ({max_speed} m/s): not a sensor's motion",
+                    "line {}: the poses of frames {} and {} are {d:.3} m apart in {} s ({:.1} m/s), faster than the pose sanity bound max_speed ({max_speed} m/s): not a sensor's motion",
                     lines.get(k).copied().unwrap_or(0),
                     frames[k - 1].name,
                     frames[k].name,

@@ -37,9 +37,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::geometry::ConvexPolygon;
 
-/// Weights of the boundary LP.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+/// Weights of the boundary LP (a method constant, [`FIT`], in every
+/// configuration).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoundaryFitParams {
     /// Cost of leaving an inside (reflective) sample outside, per metre.
     pub inside_weight: f64,
@@ -62,14 +62,20 @@ pub enum BoundarySolver {
     PerEdge,
 }
 
+/// The boundary fit of every configuration: inside and outside samples
+/// weigh 1 per metre each, the polygon's size 0.05 per metre, each offset
+/// found exactly by the per-edge sweep.
+pub const FIT: BoundaryFitParams = BoundaryFitParams {
+    inside_weight: 1.0,
+    outside_weight: 1.0,
+    regularizer: 0.05,
+    solver: BoundarySolver::PerEdge,
+};
+
 impl Default for BoundaryFitParams {
+    /// [`FIT`].
     fn default() -> Self {
-        Self {
-            inside_weight: 1.0,
-            outside_weight: 1.0,
-            regularizer: 0.05,
-            solver: BoundarySolver::PerEdge,
-        }
+        FIT
     }
 }
 

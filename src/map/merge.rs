@@ -6,7 +6,7 @@ use super::landmark::{hull_on_plane, Landmark, PlaneMap, PlaneObservation};
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
 
 /// Fuses observations into a [`PlaneMap`]. Implementations are selected by
-/// name in the configuration (`[map] merger = ...`).
+/// name ([`super::MapParams::merger`], no key).
 pub trait MapMerger: Send + Sync {
     /// The name this merger is selected by.
     fn name(&self) -> &'static str;
@@ -24,26 +24,40 @@ pub trait MapMerger: Send + Sync {
 
 /// Matching and weighting thresholds of the paper's merger.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MergeParams {
     /// Normals match when `1 - cos(angle) <` this (paper: 0.2, about 37 deg).
     pub max_one_minus_cos: f64,
     /// Offsets match when `|d_new - d_map| <` this, m (paper: 0.1).
     pub max_offset: f64,
-    /// Weight of the stored plane after its first observation (paper: 3).
+    /// Weight of the stored plane after its first observation: [`SECOND_WEIGHT`].
+    #[serde(skip, default = "second_weight")]
     pub second_weight: f64,
-    /// Cap on the stored plane's weight (paper: 10).
+    /// Cap on the stored plane's weight: [`MAX_WEIGHT`].
+    #[serde(skip, default = "max_weight")]
     pub max_weight: f64,
 }
 
+/// The paper's weighted average: weight of the stored plane after its first
+/// observation (then its observation count), against 1 for the new one.
+/// Also the average back-end's (`backend::average`).
+pub const SECOND_WEIGHT: f64 = 3.0;
+
+/// The paper's cap on the stored plane's weight in the weighted average.
+pub const MAX_WEIGHT: f64 = 10.0;
+
+fn second_weight() -> f64 {
+    SECOND_WEIGHT
+}
+
+fn max_weight() -> f64 {
+    MAX_WEIGHT
+}
+
 impl Default for MergeParams {
+    /// `[map.merge]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            max_one_minus_cos: 0.2,
-            max_offset: 0.1,
-            second_weight: 3.0,
-            max_weight: 10.0,
-        }
+        crate::config::default_section("map.merge")
     }
 }
 

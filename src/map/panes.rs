@@ -17,24 +17,27 @@ use crate::geometry::ConvexPolygon;
 
 /// Pane segmentation settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct PaneParams {
     /// Smallest pane kept, m².
     pub min_area: f64,
     /// Opaque cells within this distance of a pane's cells constrain its
     /// boundary, m.
     pub context: f64,
-    /// The boundary LP's weights.
+    /// The boundary LP's weights and solver: [`super::boundary_fit::FIT`]
+    /// (no keys).
+    #[serde(skip, default = "fit")]
     pub fit: BoundaryFitParams,
 }
 
+fn fit() -> BoundaryFitParams {
+    super::boundary_fit::FIT
+}
+
 impl Default for PaneParams {
+    /// `[map.panes]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            min_area: 0.2,
-            context: 1.0,
-            fit: BoundaryFitParams::default(),
-        }
+        crate::config::default_section("map.panes")
     }
 }
 

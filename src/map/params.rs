@@ -31,12 +31,13 @@ pub enum BoundaryMode {
 
 /// The global plane map.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MapParams {
-    /// The merger.
+    /// The merger: the paper's weighted average, the only one (no key).
+    #[serde(skip, default = "weighted_average")]
     pub merger: MergerName,
-    /// Landmarks observed fewer times are not used for classification
-    /// (paper: 10).
+    /// Landmarks observed fewer times (frames) are not used for
+    /// classification (paper: 10).
     pub min_observations: usize,
     /// Landmarks found in fewer than this share of the frames that had them
     /// in view (front side, within `visibility_range`) are not used: chance
@@ -71,18 +72,14 @@ impl MapParams {
     }
 }
 
+/// The merger of every configuration: the paper's weighted average.
+fn weighted_average() -> MergerName {
+    MergerName::WeightedAverage
+}
+
 impl Default for MapParams {
+    /// `[map]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            merger: MergerName::WeightedAverage,
-            min_observations: 10,
-            min_found_ratio: 0.0,
-            visibility_range: 10.0,
-            merge: MergeParams::default(),
-            boundary: BoundaryMode::Hull,
-            evidence: EvidenceParams::default(),
-            ghosts: GhostParams::default(),
-            panes: PaneParams::default(),
-        }
+        crate::config::default_section("map")
     }
 }

@@ -76,21 +76,24 @@ pub fn plane_map_classifier(config: &Config) -> crate::Result<PlaneMapClassifier
     PlaneMapClassifier::new(config.plane_map.clone())
 }
 
-/// The map merger named in `[map] merger`.
+/// The map merger of [`crate::map::MapParams::merger`] (the weighted
+/// average; no key).
 pub fn merger(config: &Config) -> Box<dyn MapMerger> {
     match config.map.merger {
         MergerName::WeightedAverage => Box::new(WeightedAverageMerger::new(config.map.merge)),
     }
 }
 
-/// The plane extractor named in `[extractor] name`.
+/// The plane extractor of [`crate::frontend::ExtractorParams::name`]
+/// (region growing; no key).
 pub fn extractor(config: &Config) -> Box<dyn PlaneExtractor> {
     match config.extractor.name {
         ExtractorName::RegionGrowing => Box::new(RegionGrowingExtractor::new(config.extractor)),
     }
 }
 
-/// The mismatch rejector named in `[slam.rejector] name`.
+/// The mismatch rejector of [`crate::registration::RejectorParams::name`]
+/// (the ground-constrained triple RANSAC; no key).
 pub fn rejector(config: &Config) -> Box<dyn MismatchRejector> {
     match config.slam.rejector.name {
         RejectorName::GroundTripleRansac => Box::new(GroundTripleRansac::new(config.slam.rejector)),

@@ -57,31 +57,21 @@ pub const DEFAULT_FRAME_CACHE_MB: f64 = 256.0;
 /// Input handling: how frames find their poses and how many parsed frames
 /// a sequence keeps (the `[input]` section of the configuration).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct InputParams {
     /// A frame is matched to the pose with the nearest timestamp, which must
-    /// be within this many seconds.
+    /// be within this many seconds, s.
     pub pose_tolerance: f64,
     /// A frame with no pose within `pose_tolerance` gets one interpolated
     /// between the poses before and after it (SLERP) when they are at most
-    /// this many seconds apart; beyond, the run stops naming the frame
-    /// (0: never interpolate).
+    /// this many seconds apart, s; beyond, the run stops naming the frame
+    /// (with 0 no two poses are that close: never interpolate).
     pub pose_interpolation_gap: f64,
     /// Frames read from files are kept in memory after their first read,
     /// up to this many megabytes of points, so later passes over the
     /// sequence do not parse them again; beyond it frames are re-read at
-    /// every pass (memory stays bounded whatever the sequence length).
+    /// every pass (memory stays bounded whatever the sequence length), MB.
     pub frame_cache_mb: f64,
-    /// Metres: a pose (`T_world_sensor`) whose translation is longer is an
-    /// error naming the pose file and line. No sensor is 100 km from its
-    /// map origin; such a pose is corrupt or in the wrong unit, and would
-    /// silently classify every point as Normal.
-    pub max_pose_translation: f64,
-    /// Metres per second: consecutive frames whose poses are farther apart
-    /// than this times the time between their timestamps are an error
-    /// naming the pose file and line (100 m/s, 360 km/h, is beyond any
-    /// vehicle or person carrying a LiDAR).
-    pub max_speed: f64,
 }
 
 impl InputParams {
@@ -90,21 +80,16 @@ impl InputParams {
         crate::io::PoseMatching {
             tolerance: self.pose_tolerance,
             max_gap: self.pose_interpolation_gap,
-            max_translation: self.max_pose_translation,
-            max_speed: self.max_speed,
+            max_translation: crate::io::frames::MAX_POSE_TRANSLATION,
+            max_speed: crate::io::frames::MAX_SPEED,
         }
     }
 }
 
 impl Default for InputParams {
+    /// `[input]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            pose_tolerance: 0.01,
-            pose_interpolation_gap: 0.0,
-            frame_cache_mb: DEFAULT_FRAME_CACHE_MB,
-            max_pose_translation: crate::io::frames::DEFAULT_MAX_POSE_TRANSLATION,
-            max_speed: crate::io::frames::DEFAULT_MAX_SPEED,
-        }
+        crate::config::default_section("input")
     }
 }
 

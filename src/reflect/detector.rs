@@ -5,12 +5,10 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::candidates::dual_return_candidates;
-use super::intensity_peak::{intensity_peak_candidates, IntensityPeakParams};
+use super::intensity_peak::intensity_peak_candidates;
 use super::{BoundedPlane, Detection, ReflectiveDetector, ReflectivePlane};
 use crate::cloud::Frame;
-use crate::geometry::cluster::euclidean_clusters;
 use crate::geometry::fit::{ransac_plane, remove_positions, RansacParams};
-use crate::geometry::{Plane, PlaneChart};
 use crate::rng::SplitMix64;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -37,56 +35,50 @@ impl CandidateSource {
     }
 }
 
-/// Detector thresholds (the paper's values are the defaults).
+/// Detector thresholds (`[detector]`; the paper's values in both
+/// built-in configurations). The intensity-peak search's thresholds belong
+/// to the sensor's intensity scale and ring layout: they are in its model
+/// ([`SensorModel::intensity_peak`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct DetectorParams {
     /// Candidate source, also the detector's name.
     pub name: CandidateSource,
     /// Two returns of one beam further apart than this are a candidate, m.
     pub dual_gap: f64,
-    /// RANSAC runs only with at least this many candidates left.
+    /// RANSAC runs only with at least this many candidates left (points).
     pub min_candidates: usize,
     /// At most this many planes per frame.
     pub max_planes: usize,
-    /// A plane needs more than this many inliers.
+    /// A plane needs more than this many inliers (points).
     pub min_inliers: usize,
-    /// Reject planes whose normal has |z| above this (1.0 keeps all; the
-    /// original Velodyne node used 0.5 to drop floors).
-    pub max_abs_normal_z: f64,
-    /// RANSAC settings.
+    /// RANSAC: the inlier distance (`[detector.ransac] distance`, m) is the
+    /// only key; iterations and probability are [`RANSAC`]'s.
+    #[serde(
+        serialize_with = "crate::geometry::fit::serialize_distance",
+        deserialize_with = "deserialize_ransac"
+    )]
     pub ransac: RansacParams,
-    /// Intensity-peak search settings.
-    pub intensity_peak: IntensityPeakParams,
-    /// Inliers are grouped into clusters linked within this distance (m) in
-    /// the plane; only clusters of at least `min_cluster` points bound the
-    /// plane, so isolated edge echoes do not stretch the hull (0 disables:
-    /// the paper's hull of all inliers).
-    pub cluster_link: f64,
-    /// Minimum cluster size kept for the boundary.
-    pub min_cluster: usize,
-    /// ... and of at least this share of the plane's inliers: a RANSAC plane
-    /// collects every candidate within its band along the whole infinite
-    /// plane, and stray groups far from the surface would stretch its hull
-    /// (0: no relative bound).
-    pub min_cluster_fraction: f64,
+}
+
+/// The detector's RANSAC but for the inlier distance (a key): at most 400
+/// iterations, stopping once an outlier-free sample was drawn with
+/// probability 0.9, and a least-squares refit (the paper's code).
+pub const RANSAC: RansacParams = RansacParams {
+    distance: 0.07,
+    max_iterations: 400,
+    probability: 0.9,
+    refit: true,
+};
+
+fn deserialize_ransac<'de, D: serde::Deserializer<'de>>(d: D) -> Result<RansacParams, D::Error> {
+    crate::geometry::fit::deserialize_distance(d, RANSAC)
 }
 
 impl Default for DetectorParams {
+    /// `[detector]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            name: CandidateSource::DualReturn,
-            dual_gap: 0.1,
-            min_candidates: 300,
-            max_planes: 3,
-            min_inliers: 200,
-            max_abs_normal_z: 1.0,
-            ransac: RansacParams::default(),
-            intensity_peak: IntensityPeakParams::default(),
-            cluster_link: 0.0,
-            min_cluster: 1,
-            min_cluster_fraction: 0.0,
-        }
+        crate::config::default_section("detector")
     }
 }
 
@@ -131,48 +123,15 @@ impl CandidateRansacDetector {
             }
             let plane = fit.plane.facing(&origin);
             let inliers: Vec<u32> = fit.inliers.iter().map(|&k| remaining[k as usize]).collect();
-            if plane.normal.z.abs() <= p.max_abs_normal_z {
-                let support = self.boundary_support(frame, &plane, &inliers);
-                if support.len() >= 3 {
-                    let bounded = BoundedPlane::from_points(
-                        plane,
-                        support.iter().map(|&i| frame.points[i as usize].position()),
-                    );
-                    out.push(ReflectivePlane { bounded, inliers });
-                }
+            if inliers.len() >= 3 {
+                let bounded = BoundedPlane::from_points(
+                    plane,
+                    inliers.iter().map(|&i| frame.points[i as usize].position()),
+                );
+                out.push(ReflectivePlane { bounded, inliers });
             }
             remove_positions(&mut remaining, &fit.inliers);
         }
-    }
-}
-
-impl CandidateRansacDetector {
-    /// The inliers that bound the plane: all of them, or those in clusters
-    /// of at least `min_cluster` points (see [`DetectorParams::cluster_link`]).
-    fn boundary_support(&self, frame: &Frame, plane: &Plane, inliers: &[u32]) -> Vec<u32> {
-        let p = &self.params;
-        if !(p.cluster_link > 0.0) {
-            return inliers.to_vec();
-        }
-        let chart = PlaneChart::of(plane);
-        let uv: Vec<_> = inliers
-            .iter()
-            .map(|&i| chart.to_2d(&frame.points[i as usize].position()))
-            .collect();
-        let labels = euclidean_clusters(&uv, p.cluster_link);
-        let mut sizes = vec![0usize; labels.iter().max().map_or(0, |m| m + 1)];
-        for &l in &labels {
-            sizes[l] += 1;
-        }
-        inliers
-            .iter()
-            .zip(&labels)
-            .filter(|(_, &l)| {
-                sizes[l] >= p.min_cluster
-                    && sizes[l] as f64 >= p.min_cluster_fraction * inliers.len() as f64
-            })
-            .map(|(&i, _)| i)
-            .collect()
     }
 }
 
@@ -199,10 +158,13 @@ impl ReflectiveDetector for CandidateRansacDetector {
             candidates = dual;
         }
         if p.name != CandidateSource::DualReturn {
-            let peaks = intensity_peak_candidates(frame, scan, &self.sensor, &p.intensity_peak);
-            let min = p.intensity_peak.min_inliers;
-            self.fit_planes(frame, &peaks, min, min, &mut rng, &mut planes);
-            candidates.extend(peaks);
+            // A sensor model without intensity-peak thresholds gives none.
+            if let Some(peak) = &self.sensor.intensity_peak {
+                let peaks = intensity_peak_candidates(frame, scan, &self.sensor, peak);
+                let min = peak.min_inliers;
+                self.fit_planes(frame, &peaks, min, min, &mut rng, &mut planes);
+                candidates.extend(peaks);
+            }
             candidates.sort_unstable();
             candidates.dedup();
         }

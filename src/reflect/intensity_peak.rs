@@ -11,50 +11,38 @@ use serde::{Deserialize, Serialize};
 use crate::cloud::Frame;
 use crate::sensor::{OrganizedScan, SensorModel};
 
-/// Thresholds of the intensity-peak search. Angles are in degrees so one
-/// parameter set serves sensors of different column resolution (the defaults
-/// are the original HDL-32E values: 10, 15 and 20 columns of 0.16 degrees).
+/// Thresholds of the intensity-peak search: constants of a sensor's
+/// intensity scale and ring layout, the `[intensity_peak]` table of its
+/// model (`configs/sensors/*.toml`). Angles are in degrees so one parameter
+/// set serves sensors of different column resolution (the built-in sensors
+/// carry the original HDL-32E values: 10, 15 and 20 columns of 0.16
+/// degrees; intensities are on the sensor's 0-255 scale).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct IntensityPeakParams {
-    /// Elevation of the ring searched for peaks (the ring nearest to it is used).
+    /// Elevation of the ring searched for peaks (the ring nearest to it is
+    /// used), degrees.
     pub ring_elevation_deg: f64,
-    /// Minimum intensity at the peak.
+    /// Minimum intensity at the peak (the sensor's intensity scale).
     pub peak_min: f32,
     /// Maximum intensity `near_deg` away from the peak on both sides.
     pub near_max: f32,
-    /// Azimuth offset of the near flank test.
+    /// Azimuth offset of the near flank test, degrees.
     pub near_deg: f64,
     /// Maximum intensity `far_deg` away from the peak on both sides.
     pub far_max: f32,
-    /// Azimuth offset of the far flank test.
+    /// Azimuth offset of the far flank test, degrees.
     pub far_deg: f64,
     /// Rings above and below that must show the same rise and fall.
     pub verify_rings: usize,
-    /// Half width (azimuth) of the region marked around a verified peak.
+    /// Half width (azimuth) of the region marked around a verified peak,
+    /// degrees.
     pub region_deg: f64,
     /// Only points within this horizontal range are marked (peaks need
-    /// near-normal incidence, which happens close to the surface).
+    /// near-normal incidence, which happens close to the surface), m.
     pub max_range: f64,
     /// Minimum inliers for a plane fitted to peak candidates.
     pub min_inliers: usize,
-}
-
-impl Default for IntensityPeakParams {
-    fn default() -> Self {
-        Self {
-            ring_elevation_deg: 0.0,
-            peak_min: 35.0,
-            near_max: 50.0,
-            near_deg: 1.6,
-            far_max: 30.0,
-            far_deg: 2.4,
-            verify_rings: 2,
-            region_deg: 1.6,
-            max_range: 3.0,
-            min_inliers: 12,
-        }
-    }
 }
 
 /// Indices (ascending) of the return-1 points in verified intensity peaks.
@@ -174,7 +162,9 @@ mod tests {
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         let frame = wall_with_peak(&sensor, true);
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
-        let params = IntensityPeakParams::default();
+        let params = sensor
+            .intensity_peak
+            .expect("the QT64 has intensity-peak thresholds");
         let found = intensity_peak_candidates(&frame, &scan, &sensor, &params);
         assert!(found.len() >= 5, "found {}", found.len());
         for &i in &found {

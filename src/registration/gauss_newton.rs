@@ -37,28 +37,42 @@ use crate::geometry::se3;
 
 /// Gauss–Newton settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct GaussNewtonParams {
-    /// Most iterations.
+    /// Most iterations: [`MAX_ITERATIONS`].
+    #[serde(skip, default = "max_iterations")]
     pub max_iterations: usize,
-    /// Stop when the step's norm falls below this.
+    /// Stop when the step's norm falls below this: [`MIN_STEP`].
+    #[serde(skip, default = "min_step")]
     pub min_step: f64,
     /// Eigenvalues of `JᵀJ` at or below this mark unobservable directions.
     /// One unit-normal pair contributes `cos²` of the angle between its
     /// normal and a translation direction, so 0.25 asks for a plane within
     /// 60° of it; the position error along a direction is about the offset
     /// noise over `√λ`, so weaker directions are better left to the motion
-    /// model.
+    /// model (dimensionless, like the eigenvalues).
     pub degeneracy_threshold: f64,
 }
 
+/// Gauss–Newton iterations of a plane registration at most.
+pub const MAX_ITERATIONS: usize = 10;
+
+/// A plane registration stops when its step's norm (a twist: m and rad)
+/// falls below this.
+pub const MIN_STEP: f64 = 1e-9;
+
+fn max_iterations() -> usize {
+    MAX_ITERATIONS
+}
+
+fn min_step() -> f64 {
+    MIN_STEP
+}
+
 impl Default for GaussNewtonParams {
+    /// `[slam.gauss_newton]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            max_iterations: 10,
-            min_step: 1e-9,
-            degeneracy_threshold: 0.25,
-        }
+        crate::config::default_section("slam.gauss_newton")
     }
 }
 

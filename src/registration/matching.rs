@@ -29,7 +29,7 @@ use crate::io::PlaneKind;
 
 /// The four matching thresholds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MatchCriteria {
     /// Normals must have a larger cosine (paper: 0.8).
     pub min_normal_cos: f64,
@@ -43,13 +43,9 @@ pub struct MatchCriteria {
 }
 
 impl Default for MatchCriteria {
+    /// [`FRAME_MATCHING`](crate::slam::tracker::FRAME_MATCHING).
     fn default() -> Self {
-        Self {
-            min_normal_cos: 0.8,
-            max_offset: 0.1,
-            max_centroid_distance: std::f64::consts::FRAC_1_SQRT_2,
-            max_area_ratio: 1.5,
-        }
+        crate::slam::tracker::FRAME_MATCHING
     }
 }
 

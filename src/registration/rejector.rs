@@ -30,9 +30,11 @@ pub enum RejectorName {
 
 /// Settings of the mismatch rejection.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct RejectorParams {
-    /// The rejector.
+    /// The rejector: the ground-constrained triple RANSAC in every
+    /// configuration (no key).
+    #[serde(skip, default = "ground_triple_ransac")]
     pub name: RejectorName,
     /// A pair is an inlier of a transform when the moved source normal is
     /// within this angle of the target normal, degrees.
@@ -41,23 +43,32 @@ pub struct RejectorParams {
     pub inlier_offset: f64,
     /// Two normals closer than this angle count as parallel, degrees.
     pub min_pair_angle_deg: f64,
-    /// Enumerate all triples up to this many, else sample this many.
+    /// Enumerate all triples up to this many, else sample this many:
+    /// [`MAX_HYPOTHESES`].
+    #[serde(skip, default = "max_hypotheses")]
     pub max_hypotheses: usize,
     /// Eigenvalue of `AᵀA` below which a translation direction is left to
-    /// the prior in the closed form.
+    /// the prior in the closed form (a sum of squared unit-normal
+    /// components, dimensionless).
     pub min_eigenvalue: f64,
 }
 
+/// Triples of plane pairs: all of them up to this many, else this many
+/// sampled.
+pub const MAX_HYPOTHESES: usize = 2000;
+
+fn max_hypotheses() -> usize {
+    MAX_HYPOTHESES
+}
+
+fn ground_triple_ransac() -> RejectorName {
+    RejectorName::GroundTripleRansac
+}
+
 impl Default for RejectorParams {
+    /// `[slam.rejector]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            name: RejectorName::GroundTripleRansac,
-            inlier_angle_deg: 5.0,
-            inlier_offset: 0.1,
-            min_pair_angle_deg: 15.0,
-            max_hypotheses: 2000,
-            min_eigenvalue: 0.25,
-        }
+        crate::config::default_section("slam.rejector")
     }
 }
 
@@ -78,7 +89,7 @@ pub struct Consensus {
 }
 
 /// Removes mismatched pairs. Implementations are selected by name in the
-/// configuration (`[slam.rejector] name = ...`).
+/// configuration ([`RejectorParams::name`], no key).
 pub trait MismatchRejector: Send + Sync {
     /// The name this rejector is selected by.
     fn name(&self) -> &'static str;

@@ -48,6 +48,11 @@ pub struct SensorModel {
     /// Frames that say otherwise (a PLY comment, the simulator) win.
     #[serde(default)]
     pub intensity: IntensityScale,
+    /// Thresholds of the intensity-peak candidate search (the detector's
+    /// `intensity-peak` sources), on this sensor's intensity scale and ring
+    /// layout; a sensor without them gives no intensity-peak candidates.
+    #[serde(default)]
+    pub intensity_peak: Option<crate::reflect::IntensityPeakParams>,
 }
 
 /// Built-in sensor descriptions, embedded so a fresh clone needs no files.

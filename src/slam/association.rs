@@ -27,7 +27,7 @@ use crate::registration::Correspondence;
 
 /// Scan-to-map matching thresholds.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MapMatchParams {
     /// World-frame normals must have a larger cosine.
     pub min_normal_cos: f64,
@@ -40,12 +40,9 @@ pub struct MapMatchParams {
 }
 
 impl Default for MapMatchParams {
+    /// [`MAP_MATCHING`](crate::slam::tracker::MAP_MATCHING).
     fn default() -> Self {
-        Self {
-            min_normal_cos: 0.8,
-            max_offset: 0.1,
-            min_overlap: 0.7,
-        }
+        crate::slam::tracker::MAP_MATCHING
     }
 }
 

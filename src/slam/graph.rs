@@ -163,14 +163,13 @@ fn graph_of(
         params.odometry_translation_sigma,
         params.odometry_rotation_sigma,
     );
-    let free_info = (params.odometry_free_translation_sigma > 0.0
-        && params.odometry_free_rotation_sigma > 0.0)
-        .then(|| {
-            diagonal_sqrt_info(
-                params.odometry_free_translation_sigma,
-                params.odometry_free_rotation_sigma,
-            )
-        });
+    let free_info = match (
+        params.odometry_free_translation_sigma,
+        params.odometry_free_rotation_sigma,
+    ) {
+        (Some(t), Some(r)) => Some(diagonal_sqrt_info(t, r)),
+        _ => None,
+    };
     for pair in frames.windows(2) {
         let (a, b) = (pair[0], pair[1]);
         let mut measured = Isometry3::identity();
@@ -213,9 +212,12 @@ fn graph_of(
                 .push(GraphFactor::new(factor).with_robust(l.robust));
         }
     }
-    if params.point_anchor_translation_sigma > 0.0 && params.point_anchor_rotation_sigma > 0.0 {
+    if let (Some(t), Some(r)) = (
+        params.point_anchor_translation_sigma,
+        params.point_anchor_rotation_sigma,
+    ) {
         for &k in frames {
-            if let Some(f) = anchor_factor(log, frames, k, params) {
+            if let Some(f) = anchor_factor(log, frames, k, (t, r)) {
                 graph.add(f);
             }
         }
@@ -230,9 +232,9 @@ fn graph_of(
         let Some(landmark) = planes.get(&obs.landmark) else {
             continue;
         };
-        if params.max_observation_rms > 0.0
-            && observation_rms(obs, &log.frames[obs.frame].pose, landmark)
-                > params.max_observation_rms
+        if params
+            .max_observation_rms
+            .is_some_and(|max| observation_rms(obs, &log.frames[obs.frame].pose, landmark) > max)
         {
             continue;
         }
@@ -333,7 +335,7 @@ fn anchor_factor(
     log: &TrackingLog,
     frames: &[usize],
     k: usize,
-    params: &BackendParams,
+    sigmas: (f64, f64),
 ) -> Option<AnyFactor> {
     let anchor = log.frames[k].points_anchor.as_ref()?;
     // The last pose of the graph at or before the anchor frame; in a
@@ -347,10 +349,7 @@ fn anchor_factor(
         .copied()
         .filter(|&a| a < k)?;
     let measured = log.frames[a].pose.inverse() * log.frames[k].pose;
-    let (t, r) = (
-        1.0 / params.point_anchor_translation_sigma,
-        1.0 / params.point_anchor_rotation_sigma,
-    );
+    let (t, r) = (1.0 / sigmas.0, 1.0 / sigmas.1);
     let weights = Vector6::new(t, t, t, r, r, r);
     let mut info = Matrix6::zeros();
     for (row, v) in anchor.directions.iter().take(6).enumerate() {
@@ -501,7 +500,7 @@ mod tests {
             directions: vec![Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0)],
         });
         let params = BackendParams {
-            point_anchor_translation_sigma: 0.04,
+            point_anchor_translation_sigma: Some(0.04),
             ..BackendParams::default()
         };
         let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
@@ -519,7 +518,8 @@ mod tests {
         assert_eq!(f.sqrt_info.row(0).iter().filter(|v| **v != 0.0).count(), 1);
         assert!(f.sqrt_info.rows(1, 5).iter().all(|v| *v == 0.0));
         let off = BackendParams {
-            point_anchor_translation_sigma: 0.0,
+            point_anchor_translation_sigma: None,
+            point_anchor_rotation_sigma: None,
             ..params
         };
         assert_eq!(
@@ -551,8 +551,8 @@ mod tests {
         l.frames[2].odometry_free = vec![Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0)];
         let params = BackendParams {
             odometry_translation_sigma: 0.01,
-            odometry_free_translation_sigma: 0.5,
-            odometry_free_rotation_sigma: 0.1,
+            odometry_free_translation_sigma: Some(0.5),
+            odometry_free_rotation_sigma: Some(0.1),
             ..BackendParams::default()
         };
         let graph = tracking_graph(&l, &PlaneMap::new(), &params).unwrap();
@@ -566,7 +566,8 @@ mod tests {
         };
         assert!((first.sqrt_info[(0, 0)] - 100.0).abs() < 1e-9);
         let off = BackendParams {
-            odometry_free_translation_sigma: 0.0,
+            odometry_free_translation_sigma: None,
+            odometry_free_rotation_sigma: None,
             ..params
         };
         let graph = tracking_graph(&l, &PlaneMap::new(), &off).unwrap();

@@ -58,7 +58,7 @@ pub enum MotionModelName {
 
 /// Motion-model settings (`[slam.motion]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MotionParams {
     /// The model.
     pub model: MotionModelName,
@@ -72,10 +72,13 @@ pub struct MotionParams {
     /// (missing, equal or decreasing), s.
     pub frame_period: f64,
     /// A tracked pose farther than this (plus `max_acceleration dt² / 2`)
-    /// from the extrapolation of the poses before it is implausible, m.
+    /// from the extrapolation of the poses before it is implausible (it is
+    /// reported), m: [`IMPLAUSIBLE_JUMP`].
+    #[serde(skip, default = "implausible_jump")]
     pub implausible_jump: f64,
     /// ... or turned farther than this (plus `max_angular_acceleration_deg
-    /// dt² / 2`), degrees.
+    /// dt² / 2`), degrees: [`IMPLAUSIBLE_TURN_DEG`].
+    #[serde(skip, default = "implausible_turn_deg")]
     pub implausible_turn_deg: f64,
     /// Share of the measured change of velocity taken per frame in the
     /// directions the frame's planes left free (1: as in the observed
@@ -83,17 +86,26 @@ pub struct MotionParams {
     pub free_direction_gain: f64,
 }
 
+/// A tracked pose farther than this, m, from the extrapolation of the two
+/// before it (plus `max_acceleration dt² / 2`) is reported implausible.
+pub const IMPLAUSIBLE_JUMP: f64 = 0.15;
+
+/// ... or turned farther than this, degrees (plus
+/// `max_angular_acceleration_deg dt² / 2`).
+pub const IMPLAUSIBLE_TURN_DEG: f64 = 10.0;
+
+fn implausible_jump() -> f64 {
+    IMPLAUSIBLE_JUMP
+}
+
+fn implausible_turn_deg() -> f64 {
+    IMPLAUSIBLE_TURN_DEG
+}
+
 impl Default for MotionParams {
+    /// `[slam.motion]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            model: MotionModelName::ConstantVelocity,
-            max_acceleration: 2.0,
-            max_angular_acceleration_deg: 100.0,
-            frame_period: 0.1,
-            implausible_jump: 0.15,
-            implausible_turn_deg: 10.0,
-            free_direction_gain: 0.25,
-        }
+        crate::config::default_section("slam.motion")
     }
 }
 

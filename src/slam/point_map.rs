@@ -31,7 +31,7 @@ use crate::sensor::OrganizedScan;
 
 /// Settings of the point term (`[slam.points]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct PointParams {
     /// Refine the directions the planes leave free with points.
     pub enabled: bool,
@@ -40,58 +40,131 @@ pub struct PointParams {
     /// Edge of the local map's voxels, m.
     pub map_voxel: f64,
     /// Samples kept per map voxel (the first ones; later ones are dropped).
+    ///
+    /// [`MAX_POINTS_PER_VOXEL`] in every configuration (no key).
+    #[serde(skip, default = "max_points_per_voxel")]
     pub max_points_per_voxel: usize,
     /// Map voxels farther than this from the sensor are forgotten, m: the
     /// map's memory is bounded by the space around the sensor, not by the
     /// frames.
+    ///
+    /// [`MAP_RADIUS`] in every configuration (no key).
+    #[serde(skip, default = "map_radius")]
     pub map_radius: f64,
     /// Samples nearer the sensor than this are ignored (the platform and
     /// its operator), m.
+    ///
+    /// [`MIN_RANGE`] in every configuration (no key).
+    #[serde(skip, default = "min_range")]
     pub min_range: f64,
     /// A sample and its nearest map point farther apart than this are no
     /// correspondence, m.
     pub max_correspondence: f64,
     /// Scale of the Cauchy kernel on point-to-plane residuals, m.
+    ///
+    /// [`KERNEL_SCALE`] in every configuration (no key).
+    #[serde(skip, default = "kernel_scale")]
     pub kernel_scale: f64,
     /// Gauss–Newton iterations of the point refinement.
+    ///
+    /// [`MAX_ITERATIONS`] in every configuration (no key).
+    #[serde(skip, default = "max_iterations")]
     pub max_iterations: usize,
     /// A free direction counts as fixed by points when their information
     /// along it reaches this (about the number of samples whose surface
     /// faces along it, each weighted by its kernel weight).
+    ///
+    /// [`MIN_INFORMATION`] in every configuration (no key).
+    #[serde(skip, default = "min_information")]
     pub min_information: f64,
     /// Samples take part in the refinement of a free direction only when
     /// their surface faces along it at least this much (`|n · v|`; see
     /// [`PointRefineParams::min_alignment`](crate::registration::PointRefineParams::min_alignment)).
+    ///
+    /// [`MIN_ALIGNMENT`] in every configuration (no key).
+    #[serde(skip, default = "min_alignment")]
     pub min_alignment: f64,
     /// Samples behind a reflective plane within this margin of its extent
     /// are left out (they may be mirror images), m.
+    ///
+    /// [`REFLECTIVE_MARGIN`] in every configuration (no key).
+    #[serde(skip, default = "reflective_margin")]
     pub reflective_margin: f64,
     /// ... except behind a reflective plane that every free direction of
-    /// the frame lies in, within this angle (degrees; 0: none excepted): a
+    /// the frame lies in, within this angle (degrees; absent: none excepted): a
     /// mirror image moves exactly like the real world under a translation
     /// parallel to the mirror, so for a glass-lined corridor's axis what is
     /// seen through or in its walls measures the axis as well as what is
     /// not.
-    pub parallel_reflective_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parallel_reflective_deg: Option<f64>,
+}
+
+/// Samples kept per voxel of the local point map (the first ones; later
+/// ones are dropped).
+pub const MAX_POINTS_PER_VOXEL: usize = 20;
+
+/// Local-map voxels farther than this from the sensor are forgotten, m.
+pub const MAP_RADIUS: f64 = 30.0;
+
+/// Samples nearer the sensor than this are ignored (the platform and its
+/// operator), m.
+pub const MIN_RANGE: f64 = 0.5;
+
+/// Scale of the Cauchy kernel on point-to-plane residuals, m.
+pub const KERNEL_SCALE: f64 = 0.05;
+
+/// Gauss–Newton iterations of the point refinement.
+pub const MAX_ITERATIONS: usize = 10;
+
+/// Information (about the number of samples facing along it, kernel
+/// weighted) that fixes a free direction by points.
+pub const MIN_INFORMATION: f64 = 20.0;
+
+/// Samples refine a free direction only when their surface faces along it
+/// at least this much (`|n · v|`).
+pub const MIN_ALIGNMENT: f64 = 0.3;
+
+/// Samples behind a reflective plane within this margin of its extent are
+/// left out (they may be mirror images), m.
+pub const REFLECTIVE_MARGIN: f64 = 0.5;
+
+fn max_points_per_voxel() -> usize {
+    MAX_POINTS_PER_VOXEL
+}
+
+fn map_radius() -> f64 {
+    MAP_RADIUS
+}
+
+fn min_range() -> f64 {
+    MIN_RANGE
+}
+
+fn kernel_scale() -> f64 {
+    KERNEL_SCALE
+}
+
+fn max_iterations() -> usize {
+    MAX_ITERATIONS
+}
+
+fn min_information() -> f64 {
+    MIN_INFORMATION
+}
+
+fn min_alignment() -> f64 {
+    MIN_ALIGNMENT
+}
+
+fn reflective_margin() -> f64 {
+    REFLECTIVE_MARGIN
 }
 
 impl Default for PointParams {
+    /// `[slam.points]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            enabled: true,
-            sample_voxel: 0.3,
-            map_voxel: 0.5,
-            max_points_per_voxel: 20,
-            map_radius: 30.0,
-            min_range: 0.5,
-            max_correspondence: 0.5,
-            kernel_scale: 0.05,
-            max_iterations: 10,
-            min_information: 20.0,
-            min_alignment: 0.3,
-            reflective_margin: 0.5,
-            parallel_reflective_deg: 5.0,
-        }
+        crate::config::default_section("slam.points")
     }
 }
 

@@ -30,28 +30,42 @@ use crate::registration::{
 
 /// Settings of the heading search (`[slam.recovery]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct RecoveryParams {
     /// Search the heading when frame-to-frame registration fails.
     pub enabled: bool,
     /// Largest heading change tried on each side of the prediction,
     /// degrees.
     pub max_yaw_deg: f64,
-    /// Step between the headings tried, degrees.
+    /// Step between the headings tried, degrees: [`YAW_STEP_DEG`].
+    #[serde(skip, default = "yaw_step_deg")]
     pub yaw_step_deg: f64,
-    /// A registration with fewer inliers than this counts as failed (and
-    /// triggers the search), and the search must reach it.
+    /// A registration with fewer inliers (plane pairs) than this counts as
+    /// failed (and triggers the search), and the search must reach it:
+    /// [`MIN_INLIERS`].
+    #[serde(skip, default = "min_inliers")]
     pub min_inliers: usize,
 }
 
+/// Step between the headings the search tries, degrees.
+pub const YAW_STEP_DEG: f64 = 10.0;
+
+/// A frame-to-frame registration with fewer inlier plane pairs failed (and
+/// starts the heading search, which must reach it): three planes fix a pose.
+pub const MIN_INLIERS: usize = 3;
+
+fn yaw_step_deg() -> f64 {
+    YAW_STEP_DEG
+}
+
+fn min_inliers() -> usize {
+    MIN_INLIERS
+}
+
 impl Default for RecoveryParams {
+    /// `[slam.recovery]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            enabled: true,
-            max_yaw_deg: 90.0,
-            yaw_step_deg: 10.0,
-            min_inliers: 3,
-        }
+        crate::config::default_section("slam.recovery")
     }
 }
 

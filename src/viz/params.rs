@@ -8,7 +8,7 @@ use super::topdown::HeightSlice;
 
 /// Output settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct OutputParams {
     /// Voxel size used to thin the accumulated PLY maps, m (0 keeps every
     /// point).
@@ -32,11 +32,8 @@ impl OutputParams {
 }
 
 impl Default for OutputParams {
+    /// `[output]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            map_voxel: 0.03,
-            topdown_min_height: 0.3,
-            topdown_max_height: 2.0,
-        }
+        crate::config::default_section("output")
     }
 }

@@ -330,7 +330,7 @@ fn slam_dataset(
     let base = dataset.config("default")?;
     // Without a sliding window tracking does not depend on the back-end:
     // track once, optimise once per back-end.
-    let shared = if base.slam.window < 2 {
+    let shared = if base.slam.window.is_none_or(|w| w < 2) {
         Some(track_sequence(&dataset.sequence, &base, Some(truth[0]))?)
     } else {
         None

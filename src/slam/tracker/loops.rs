@@ -19,7 +19,7 @@ impl Tracker {
     /// when there is no window back-end or it fails — tracking goes on.
     pub(super) fn optimize_window(&mut self, index: usize) -> Option<Isometry3<f64>> {
         let (solver, params) = self.window.as_ref()?;
-        let start = (index + 1).saturating_sub(self.params.window);
+        let start = (index + 1).saturating_sub(self.params.window.unwrap_or(0));
         let graph = window_graph(&self.log, start..index + 1, &self.map, params).ok()?;
         let values = match solver.optimize(&graph, &graph.values) {
             Ok((values, report)) => {

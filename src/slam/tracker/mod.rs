@@ -30,18 +30,24 @@ use crate::registration::{
 
 /// Reflection SLAM settings (`[slam]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct SlamParams {
     /// The motion model that predicts each pose.
     pub motion: MotionParams,
-    /// Register each frame to the previous one before the map (the paper);
-    /// without it the prediction alone starts scan-to-map.
+    /// Register each frame to the previous one before the map (the paper;
+    /// every configuration, no key); without it the prediction alone starts
+    /// scan-to-map.
+    #[serde(skip, default = "yes")]
     pub frame_to_frame: bool,
-    /// Reflective planes take part in registration (the paper: yes).
+    /// Reflective planes take part in registration (the paper; every
+    /// configuration, no key).
+    #[serde(skip, default = "yes")]
     pub use_reflective: bool,
-    /// Frame-to-frame matching criteria.
+    /// Frame-to-frame matching criteria: [`FRAME_MATCHING`] (no keys).
+    #[serde(skip, default = "frame_matching")]
     pub frame_matching: MatchCriteria,
-    /// Scan-to-map matching.
+    /// Scan-to-map matching: [`MAP_MATCHING`] (no keys).
+    #[serde(skip, default = "map_matching")]
     pub map_matching: MapMatchParams,
     /// Mismatch rejection.
     pub rejector: RejectorParams,
@@ -55,27 +61,32 @@ pub struct SlamParams {
     pub recovery: RecoveryParams,
     /// Landmarks are pruned once this many frames old ...
     pub prune_after: usize,
-    /// ... when they have fewer observations than this.
+    /// ... when they have fewer observations (frames) than this.
     pub prune_min_observations: usize,
     /// Segment length of the relative pose error, m.
     pub rpe_segment: f64,
     /// Frames in the sliding window optimised during tracking by the
-    /// back-end (0 or 1: no window; the batch optimisation at the end runs
-    /// regardless).
-    pub window: usize,
-    /// The window is optimised after every this many frames.
+    /// back-end, at least 2 (absent: no window; the batch optimisation at
+    /// the end runs regardless).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<usize>,
+    /// The window is optimised after every this many frames:
+    /// [`WINDOW_EVERY`].
+    #[serde(skip, default = "window_every")]
     pub window_every: usize,
     /// A frame is a keyframe, kept in the batch back-end's graph with its
     /// plane observations, when it moved more than this from the last
     /// keyframe, m; the others are placed relative to their keyframe
-    /// afterwards. With `keyframe_turn_deg` also 0 every frame is a
+    /// afterwards. With `keyframe_turn_deg` also absent every frame is a
     /// keyframe (the graph then grows with every frame).
-    pub keyframe_move: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframe_move: Option<f64>,
     /// ... or turned more than this, degrees.
-    pub keyframe_turn_deg: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframe_turn_deg: Option<f64>,
     /// A frame that comes more than this many times the input's usual
     /// interval after the previous one follows a gap (frames missing),
-    /// reported per frame (0: never).
+    /// reported per frame (a ratio of intervals).
     pub gap_ratio: f64,
     /// Loop closure: recognise revisits, verify them, add loop factors
     /// and re-solve ([`super::loop_closure`]).
@@ -104,28 +115,49 @@ impl FrameReport {
     }
 }
 
+/// The sliding window, when configured, is optimised every 5 frames.
+pub const WINDOW_EVERY: usize = 5;
+
+/// Frame-to-frame matching (the paper's thresholds): normals within
+/// acos 0.8 (37 deg), offsets within 0.1 m, centroids within 0.7071 m,
+/// hull areas within a factor 1.5.
+// 0.7071 as the paper's code writes it, not 1/√2: the results depend on it.
+#[allow(clippy::approx_constant)]
+pub const FRAME_MATCHING: MatchCriteria = MatchCriteria {
+    min_normal_cos: 0.8,
+    max_offset: 0.1,
+    max_centroid_distance: 0.7071,
+    max_area_ratio: 1.5,
+};
+
+/// Scan-to-map matching (the paper's thresholds): normals within acos 0.8,
+/// offsets within 0.1 m, hulls overlapping by 0.7 of the smaller.
+pub const MAP_MATCHING: MapMatchParams = MapMatchParams {
+    min_normal_cos: 0.8,
+    max_offset: 0.1,
+    min_overlap: 0.7,
+};
+
+fn yes() -> bool {
+    true
+}
+
+fn window_every() -> usize {
+    WINDOW_EVERY
+}
+
+fn frame_matching() -> MatchCriteria {
+    FRAME_MATCHING
+}
+
+fn map_matching() -> MapMatchParams {
+    MAP_MATCHING
+}
+
 impl Default for SlamParams {
+    /// `[slam]` of `configs/default.toml`.
     fn default() -> Self {
-        Self {
-            motion: MotionParams::default(),
-            frame_to_frame: true,
-            use_reflective: true,
-            frame_matching: MatchCriteria::default(),
-            map_matching: MapMatchParams::default(),
-            rejector: RejectorParams::default(),
-            gauss_newton: GaussNewtonParams::default(),
-            points: PointParams::default(),
-            recovery: RecoveryParams::default(),
-            prune_after: 30,
-            prune_min_observations: 3,
-            rpe_segment: 1.0,
-            window: 0,
-            window_every: 5,
-            keyframe_move: 0.0,
-            keyframe_turn_deg: 0.0,
-            gap_ratio: 1.5,
-            loop_closure: LoopClosureParams::default(),
-        }
+        crate::config::default_section("slam")
     }
 }
 
@@ -496,7 +528,10 @@ impl Tracker {
                 report.pose = corrected;
             }
         }
-        if p.window >= 2 && p.window_every >= 1 && (index + 1).is_multiple_of(p.window_every) {
+        if p.window.is_some_and(|w| w >= 2)
+            && p.window_every >= 1
+            && (index + 1).is_multiple_of(p.window_every)
+        {
             if let Some(corrected) = self.optimize_window(index) {
                 report.pose = corrected;
             }
@@ -505,19 +540,21 @@ impl Tracker {
     }
 
     /// Whether a frame tracked at `pose` is a keyframe: the first, every
-    /// frame when both keyframe thresholds are 0, else one that moved or
+    /// frame when both keyframe thresholds are absent, else one that moved or
     /// turned past them from the last keyframe.
     fn is_keyframe(&self, pose: &Isometry3<f64>) -> bool {
         let p = &self.params;
         let Some(last) = &self.last_keyframe else {
             return true;
         };
-        if p.keyframe_move <= 0.0 && p.keyframe_turn_deg <= 0.0 {
+        if p.keyframe_move.is_none() && p.keyframe_turn_deg.is_none() {
             return true;
         }
         let rel = last.inverse() * pose;
-        rel.translation.vector.norm() > p.keyframe_move
-            || rel.rotation.angle().to_degrees() > p.keyframe_turn_deg
+        p.keyframe_move
+            .is_some_and(|m| rel.translation.vector.norm() > m)
+            || p.keyframe_turn_deg
+                .is_some_and(|t| rel.rotation.angle().to_degrees() > t)
     }
 
     /// Log that `plane` of frame `frame` was fused into the landmark at

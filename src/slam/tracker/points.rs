@@ -33,7 +33,10 @@ impl Tracker {
         let pp = self.params.points;
         let to_sensor = pose.inverse();
         let free = report.free_directions();
-        let masks = |bp: &BoundedPlane| !in_plane(&free, bp, pp.parallel_reflective_deg);
+        let masks = |bp: &BoundedPlane| {
+            !pp.parallel_reflective_deg
+                .is_some_and(|deg| in_plane(&free, bp, deg))
+        };
         let reflective: Vec<BoundedPlane> = planes
             .iter()
             .filter(|fp| fp.kind == PlaneKind::Reflective)
