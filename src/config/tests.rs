@@ -182,6 +182,14 @@ fn section_defaults_are_the_default_file() {
             value(crate::backend::SolverParams::default()),
         ),
         ("output", value(OutputParams::default())),
+        (
+            "plane_map.mirror",
+            value(crate::map::MirrorParams::default()),
+        ),
+        (
+            "plane_map.weighing",
+            value(crate::classify::evidence::WeighingParams::default()),
+        ),
     ];
     // Every section of the file is covered (the top level is Config::default).
     let mut covered: Vec<&str> = sections.iter().map(|(p, _)| *p).collect();
@@ -191,6 +199,16 @@ fn section_defaults_are_the_default_file() {
         "extractor.ground.ransac",
     ]);
     covered.extend(["backend.robust"]);
+    // The evidence tests' tables are compared as part of their weighing's.
+    covered.extend([
+        "plane_map.weighing.seen_space",
+        "plane_map.weighing.seen_surface",
+        "plane_map.weighing.image_support",
+        "plane_map.weighing.frame_free_space",
+        "plane_map.weighing.depth",
+        "plane_map.weighing.echo_strength",
+        "plane_map.weighing.echo_order",
+    ]);
     fn tables(t: &toml::Table, prefix: &str, out: &mut Vec<String>) {
         for (k, v) in t {
             if let toml::Value::Table(sub) = v {

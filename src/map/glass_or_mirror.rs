@@ -25,7 +25,7 @@ use crate::reflect::{EchoHistogram, EchoSplit, EchoSplitParams};
 
 /// Parameters of the glass-or-mirror estimate (`[plane_map.mirror]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct MirrorParams {
     /// Probability that a reflective landmark is a mirror before its
     /// evidence.
@@ -46,15 +46,10 @@ pub struct MirrorParams {
     pub glass_reflection_decades: f64,
 }
 
+/// The values of `configs/default.toml`.
 impl Default for MirrorParams {
     fn default() -> Self {
-        Self {
-            prior: 0.3,
-            false_transmission_rate: 0.005,
-            effective_views: 50.0,
-            weak_decades: 1.0,
-            glass_reflection_decades: 1.5,
-        }
+        crate::config::default_section("plane_map.mirror")
     }
 }
 

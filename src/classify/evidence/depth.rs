@@ -9,7 +9,7 @@ use crate::classify::rule::Rule;
 /// in front: a point deeper than everything the frame saw in front of the
 /// landmark is likely real.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct Depth {
     /// Probability that a reflection lies deeper than the room the frame
     /// saw (its object outside the field of view or occluded).
@@ -18,12 +18,10 @@ pub struct Depth {
     pub margin: f64,
 }
 
+/// The values of `configs/default.toml`.
 impl Default for Depth {
     fn default() -> Self {
-        Self {
-            error: 0.01,
-            margin: 0.1,
-        }
+        crate::config::default_section("plane_map.weighing.depth")
     }
 }
 

@@ -10,20 +10,20 @@ use crate::classify::rule::Rule;
 /// back into the room, where it met something nearer than what lies behind)
 /// and the far one the transmitted echo.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct EchoOrder {
     /// Probability that the order points the wrong way.
     pub error: f64,
-    /// Two returns at least this far apart are distinct echoes, m.
-    pub min_gap: f64,
 }
 
+/// Two returns at least this far apart are distinct echoes, m (the dual
+/// returns' separation of the detector).
+const MIN_GAP: f64 = 0.1;
+
+/// The values of `configs/default.toml`.
 impl Default for EchoOrder {
     fn default() -> Self {
-        Self {
-            error: 0.3,
-            min_gap: 0.1,
-        }
+        crate::config::default_section("plane_map.weighing.echo_order")
     }
 }
 
@@ -40,9 +40,7 @@ impl EvidenceTest for EchoOrder {
         let other = point.scan.partner(point.index)?;
         let other_range = point.frame.points[other].range();
         // Both behind the landmark's crossing, and distinct.
-        if other_range <= point.crossing + self.min_gap
-            || (other_range - point.range).abs() <= self.min_gap
-        {
+        if other_range <= point.crossing + MIN_GAP || (other_range - point.range).abs() <= MIN_GAP {
             return None;
         }
         let w = outcome_weight(self.error);

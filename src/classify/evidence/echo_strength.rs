@@ -12,12 +12,8 @@ use crate::reflect::echo_split::echo_strength;
 /// as a Gaussian in each group (log-strength, decades, with the group's own
 /// mean and spread): groups that overlap weigh little.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct EchoStrength {
-    /// The least spread of the echo strengths within one group, decades:
-    /// the histogram's resolution and the range noise, where a group's own
-    /// spread is narrower.
-    pub min_spread: f64,
     /// Probability that a real echo falls deep in the reflected group (a
     /// dark or distant object behind glass): caps the weight towards a
     /// reflection.
@@ -32,14 +28,15 @@ pub struct EchoStrength {
     pub one_group_error: f64,
 }
 
+/// The least spread of the echo strengths within one group, decades: the
+/// histogram's resolution (0.05) and the range noise, where a group's own
+/// spread is narrower.
+const MIN_SPREAD: f64 = 0.1;
+
+/// The values of `configs/default.toml`.
 impl Default for EchoStrength {
     fn default() -> Self {
-        Self {
-            min_spread: 0.1,
-            weak_error: 0.2,
-            strong_error: 0.02,
-            one_group_error: 0.25,
-        }
+        crate::config::default_section("plane_map.weighing.echo_strength")
     }
 }
 
@@ -63,8 +60,8 @@ impl EvidenceTest for EchoStrength {
             1.0
         };
         let s = echo_strength(point.intensity(), point.range, split.range_exponent, cos);
-        let weak = (split.weak_mean, split.weak_spread.max(self.min_spread));
-        let strong = (split.strong_mean, split.strong_spread.max(self.min_spread));
+        let weak = (split.weak_mean, split.weak_spread.max(MIN_SPREAD));
+        let strong = (split.strong_mean, split.strong_spread.max(MIN_SPREAD));
         let (reflected, transmitted) = if split.weak_is_reflection {
             (weak, strong)
         } else {

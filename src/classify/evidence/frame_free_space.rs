@@ -10,26 +10,24 @@ use crate::classify::rule::Rule;
 /// every beam around the image's direction returned from farther away, the
 /// frame saw through that place, and the point is real.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct FrameFreeSpace {
     /// Probability that the beams around a true reflection's image all pass
     /// it (the image falls between rings, the mirrored surface is thin).
     pub error: f64,
     /// A return this much farther than the image proves the place free, m
-    /// (range noise) ...
+    /// (range noise), plus [`MARGIN_RATIO`] of the image's range.
     pub margin: f64,
-    /// ... plus this share of the image's range (an error in the plane's
-    /// orientation moves images in proportion to their range).
-    pub margin_ratio: f64,
 }
 
+/// The free-space margin grows by this share of the image's range: an
+/// error in the plane's orientation moves images in proportion.
+pub const MARGIN_RATIO: f64 = 0.01;
+
+/// The values of `configs/default.toml`.
 impl Default for FrameFreeSpace {
     fn default() -> Self {
-        Self {
-            error: 0.03,
-            margin: 0.1,
-            margin_ratio: 0.01,
-        }
+        crate::config::default_section("plane_map.weighing.frame_free_space")
     }
 }
 
@@ -45,6 +43,6 @@ impl EvidenceTest for FrameFreeSpace {
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let (_, far) = returns_along(point.scan, point.sensor, point.frame, &point.mirrored, 1)?;
         let range = point.mirrored.coords.norm();
-        (far > range + self.margin + self.margin_ratio * range).then(|| -outcome_weight(self.error))
+        (far > range + self.margin + MARGIN_RATIO * range).then(|| -outcome_weight(self.error))
     }
 }

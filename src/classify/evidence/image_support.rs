@@ -10,28 +10,26 @@ use crate::classify::rule::Rule;
 /// return of the frame at that range along the image's beam, or an observed
 /// surface within a radius.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct ImageSupport {
     /// Probability that the image of a real point lands on an observed
     /// surface by chance (cluttered rooms, surfaces perpendicular to the
     /// glass that are their own mirror image).
     pub error: f64,
-    /// A return within this range of the image along its beam supports it,
-    /// m (range noise and the plane's error).
-    pub range_tolerance: f64,
     /// An observed surface within this radius of the image supports it, m.
     /// An image this near the point itself is supported by the point's own
     /// surface: no evidence.
     pub radius: f64,
 }
 
+/// A return within this range of the image along its beam supports it, m
+/// (range noise and the plane's error).
+const RANGE_TOLERANCE: f64 = 0.1;
+
+/// The values of `configs/default.toml`.
 impl Default for ImageSupport {
     fn default() -> Self {
-        Self {
-            error: 0.3,
-            range_tolerance: 0.1,
-            radius: 0.316,
-        }
+        crate::config::default_section("plane_map.weighing.image_support")
     }
 }
 
@@ -50,7 +48,7 @@ impl EvidenceTest for ImageSupport {
         }
         let image_range = point.mirrored.coords.norm();
         let on_beam = returns_along(point.scan, point.sensor, point.frame, &point.mirrored, 1)
-            .is_some_and(|(closest, _)| (closest - image_range).abs() <= self.range_tolerance);
+            .is_some_and(|(closest, _)| (closest - image_range).abs() <= RANGE_TOLERANCE);
         let nearby = || {
             point
                 .support

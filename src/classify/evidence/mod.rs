@@ -19,7 +19,7 @@ mod frame_free_space;
 mod image_support;
 mod params;
 mod point;
-mod seen_space;
+pub mod seen_space;
 mod seen_surface;
 mod weighing;
 
@@ -28,7 +28,7 @@ pub use self::echo_order::EchoOrder;
 pub use self::echo_strength::EchoStrength;
 pub use self::frame_free_space::FrameFreeSpace;
 pub use self::image_support::ImageSupport;
-pub use self::params::{WeighingParams, DEFAULT_TESTS, TEST_NAMES};
+pub use self::params::{WeighingParams, TEST_NAMES};
 pub use self::point::BehindPoint;
 pub use self::seen_space::SeenSpace;
 pub use self::seen_surface::SeenSurface;

@@ -7,7 +7,7 @@ use super::{Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, SeenSp
 /// Parameters of the evidence weighing behind reflective landmarks
 /// (`[plane_map.weighing]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct WeighingParams {
     /// The tests weighed, by name: `seen-space`, `seen-surface`,
     /// `image-support`, `frame-free-space`, `depth`, `echo-strength`,
@@ -19,10 +19,6 @@ pub struct WeighingParams {
     /// Probability that a point behind glass is a reflection before any
     /// test (behind a mirror every point is one).
     pub reflection_prior: f64,
-    /// A beam that crossed a landmark within this distance of its extent's
-    /// edge may have passed beside it, m (panes are fitted on 0.2 m evidence
-    /// cells): there the landmark's mirror probability does not count.
-    pub edge_margin: f64,
     /// The seen-space test's parameters.
     pub seen_space: SeenSpace,
     /// The seen-surface test's parameters.
@@ -50,33 +46,9 @@ pub const TEST_NAMES: [&str; 7] = [
     "echo-order",
 ];
 
-/// The tests weighed by default: every built-in test but `image-support`,
-/// whose outcome was wrong 60 % of the time on the development split (a
-/// real point's mirror image lands on a seen surface as often as a
-/// reflection's: corridors and rooms are symmetric about their glass).
-pub const DEFAULT_TESTS: [&str; 6] = [
-    "seen-space",
-    "seen-surface",
-    "frame-free-space",
-    "depth",
-    "echo-strength",
-    "echo-order",
-];
-
+/// The values of `configs/default.toml`.
 impl Default for WeighingParams {
     fn default() -> Self {
-        Self {
-            tests: DEFAULT_TESTS.iter().map(|s| s.to_string()).collect(),
-            threshold: 0.5,
-            reflection_prior: 0.5,
-            edge_margin: 0.15,
-            seen_space: SeenSpace::default(),
-            seen_surface: SeenSurface::default(),
-            image_support: ImageSupport::default(),
-            frame_free_space: FrameFreeSpace::default(),
-            depth: Depth::default(),
-            echo_strength: EchoStrength::default(),
-            echo_order: EchoOrder::default(),
-        }
+        crate::config::default_section("plane_map.weighing")
     }
 }

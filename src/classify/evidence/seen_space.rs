@@ -14,7 +14,7 @@ use crate::classify::SurfaceSupport;
 /// seen free favours the Reflection; its mirror image seen free (or the
 /// reflected path through a seen surface) favours it being real.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct SeenSpace {
     /// Probability that the seen space refutes a true hypothesis (pose and
     /// plane errors, objects thinner than a voxel, people moving).
@@ -23,23 +23,22 @@ pub struct SeenSpace {
     /// their endpoint, m (frames and wall strips around a pane, the surface
     /// the endpoint lies on).
     pub margin: f64,
-    /// A position is seen free only if no seen surface lies within this
-    /// share of its range (at least a voxel): the plane's angular error
-    /// moves mirror images in proportion to their range.
-    pub clearance_ratio: f64,
-    /// A path towards a surface observed within this radius of its endpoint
-    /// is not refuted by a voxel it clips on the way, m.
-    pub support_radius: f64,
 }
 
+/// A position is seen free only if no seen surface lies within this share
+/// of its range (at least a voxel): the plane's angular error (about a
+/// degree) moves mirror images in proportion to their range.
+pub const CLEARANCE_RATIO: f64 = 0.02;
+
+/// A path towards a surface observed within this radius of its endpoint is
+/// not refuted by a voxel it clips on the way, m (the paper's support
+/// radius, √0.1 m).
+pub const SUPPORT_RADIUS: f64 = 0.316;
+
+/// The values of `configs/default.toml`.
 impl Default for SeenSpace {
     fn default() -> Self {
-        Self {
-            error: 0.02,
-            margin: 0.2,
-            clearance_ratio: 0.02,
-            support_radius: 0.316,
-        }
+        crate::config::default_section("plane_map.weighing.seen_space")
     }
 }
 
@@ -55,7 +54,7 @@ impl SeenSpace {
         end: &Point3<f64>,
         range: f64,
     ) -> bool {
-        if space.occupancy_clear_of(end, self.clearance_ratio * range) == Occupancy::Free {
+        if space.occupancy_clear_of(end, CLEARANCE_RATIO * range) == Occupancy::Free {
             return true;
         }
         // Start where the leg is `margin` off the plane: a leg at a grazing
@@ -75,7 +74,7 @@ impl SeenSpace {
         // edges. A path into space nobody saw, through a seen surface, is.
         let start = x + dir * (start_t / len);
         space.blocked(&start, end, self.margin)
-            && !support.is_some_and(|s| s.near(end, self.support_radius))
+            && !support.is_some_and(|s| s.near(end, SUPPORT_RADIUS))
     }
 }
 

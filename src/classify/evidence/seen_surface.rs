@@ -10,7 +10,7 @@ use crate::classify::space::Occupancy;
 /// in the sequence: it is likely real. A mirror image lands near some
 /// observed surface far more often than exactly on one.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct SeenSurface {
     /// Probability that a reflection lands exactly on a voxel seen occupied
     /// (a floor or ceiling continuing behind the glass is its own mirror
@@ -18,9 +18,10 @@ pub struct SeenSurface {
     pub error: f64,
 }
 
+/// The values of `configs/default.toml`.
 impl Default for SeenSurface {
     fn default() -> Self {
-        Self { error: 0.2 }
+        crate::config::default_section("plane_map.weighing.seen_surface")
     }
 }
 

@@ -136,7 +136,14 @@ fn unknown_tests_and_bad_thresholds_are_refused() {
         ..WeighingParams::default()
     })
     .is_err());
-    assert_eq!(Weighing::default().test_names(), DEFAULT_TESTS);
+    // The default weighs known tests, the image support not among them
+    // (wrong more often than right on the development split).
+    let names = Weighing::default().test_names().join(" ");
+    assert!(!names.contains("image-support"), "{names}");
+    assert!(Weighing::default()
+        .test_names()
+        .iter()
+        .all(|n| TEST_NAMES.contains(n)));
 }
 
 /// The depth test favours a real point deeper than the room, and the

@@ -26,8 +26,13 @@ pub struct Weighing {
     tests: Vec<Box<dyn EvidenceTest>>,
     threshold: f64,
     reflection_prior: f64,
-    edge_margin: f64,
 }
+
+/// A beam that crossed a landmark within this distance of its extent's edge
+/// may have passed beside it, m (panes are fitted on 0.2 m evidence cells
+/// and overreach by up to half of one): there the landmark's mirror
+/// probability does not count.
+pub const EDGE_MARGIN: f64 = 0.15;
 
 impl Weighing {
     /// The tests `params.tests` names, each with its parameters; an unknown
@@ -67,7 +72,6 @@ impl Weighing {
             tests,
             threshold: params.threshold,
             reflection_prior: params.reflection_prior,
-            edge_margin: params.edge_margin,
         })
     }
 
@@ -90,9 +94,7 @@ impl Weighing {
     /// The probability that `point` is a reflection before any test: its
     /// landmark a mirror (then it is one), or glass (then the prior).
     pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
-        let beside = !point
-            .landmark
-            .bounds(&point.crossing_point(), -self.edge_margin);
+        let beside = !point.landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
         let mirror = if beside || !point.single_pane {
             0.0
         } else {

@@ -320,7 +320,7 @@ impl<'a> FrameViews<'a> {
         let behind = p.decision.behind_distance;
         let glass = p.decision.glass_distance;
         let seen_space = &p.weighing.seen_space;
-        let clearance = seen_space.clearance_ratio;
+        let clearance = crate::classify::evidence::seen_space::CLEARANCE_RATIO;
         // The frames of a sequence share one intensity scale: the first
         // keyframe's, as its source says (a PLY comment, the simulator),
         // else the sensor model's.
