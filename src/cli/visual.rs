@@ -133,6 +133,7 @@ pub(crate) fn write_visual(
             m.used.len(),
             config.map.selection()
         ));
+        summary.extend(m.mirror_lines());
         summary.extend(m.ghost_lines());
     }
     let report = Report {

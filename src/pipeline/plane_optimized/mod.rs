@@ -60,6 +60,23 @@ pub struct PlaneOptimizedOutput {
 }
 
 impl PlaneOptimizedOutput {
+    /// One line per landmark whose glass-or-mirror probability was
+    /// estimated: the prior of every point behind it.
+    pub fn mirror_lines(&self) -> Vec<String> {
+        self.used
+            .iter()
+            .zip(&self.planes)
+            .filter_map(|(&i, bp)| {
+                let p = bp.mirror_probability?;
+                let id = self.map.landmarks.get(i).map_or(i, |l| l.id);
+                let kind = if p > 0.5 { "mirror" } else { "glass" };
+                Some(format!(
+                    "landmark {id}: {kind} (P(mirror) = {p:.3}, from its echoes)"
+                ))
+            })
+            .collect()
+    }
+
     /// One line per ghost landmark dropped, for the report and the console:
     /// which landmark, seen in which glass, and how much of it mirrors onto
     /// surfaces seen directly.
