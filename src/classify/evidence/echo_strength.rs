@@ -21,11 +21,6 @@ pub struct EchoStrength {
     /// Probability that a reflection falls deep in the transmitted group (a
     /// bright surface reflected): caps the weight towards real.
     pub strong_error: f64,
-    /// Where the echoes behind a landmark show one group and its split is
-    /// physics ([`EchoSplit::from_physics`](crate::reflect::EchoSplit)):
-    /// probability that a strong echo is a reflection all the same (coated
-    /// glass, whose `R` is close to its `T`); caps the weight towards real.
-    pub one_group_error: f64,
 }
 
 /// The least spread of the echo strengths within one group, decades: the
@@ -71,8 +66,11 @@ impl EvidenceTest for EchoStrength {
         // strengths tell glass's reflections from its transmissions only.
         let glass = 1.0 - point.landmark.mirror_probability.unwrap_or(0.0);
         let mut llr = glass * (log_gauss(s, reflected) - log_gauss(s, transmitted));
+        // A split not fitted to this landmark's echoes cannot tell a
+        // transmission from a reflection off coated glass (`R` close to
+        // `T`): a strong echo is no evidence, only a weak one is.
         if split.from_physics {
-            llr = llr.max(-outcome_weight(self.one_group_error));
+            llr = llr.max(0.0);
         }
         Some(llr.clamp(
             -outcome_weight(self.strong_error),
