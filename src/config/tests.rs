@@ -362,6 +362,39 @@ fn removed_keys_are_unknown() {
             "[detector.intensity_peak]\npeak_min = 35.0",
             "detector.intensity_peak",
         ),
+        (
+            "[single_scan.decision]\ndepth_test = true",
+            "single_scan.decision",
+        ),
+        (
+            "[single_scan]\nwindow_min_deg = 48.6",
+            "single_scan.window_min_deg",
+        ),
+        (
+            "[plane_map]\nspace_min_passes = 2",
+            "plane_map.space_min_passes",
+        ),
+        (
+            "[plane_map]\nsupport_keyframe_move = 0.0",
+            "plane_map.support_keyframe_move",
+        ),
+        (
+            "[plane_map.decision]\nwall_echo_test = true",
+            "plane_map.decision.wall_echo_test",
+        ),
+        (
+            "[plane_map.echo_split]\nenabled = true",
+            "plane_map.echo_split.enabled",
+        ),
+        (
+            "[plane_map.echo_split]\nmirror_blocked_paths = true",
+            "plane_map.echo_split.mirror_blocked_paths",
+        ),
+        (
+            "[map.evidence]\necho_reach = 1.0",
+            "map.evidence.echo_reach",
+        ),
+        ("[map.ghosts]\nradius = 0.3", "map.ghosts.radius"),
     ] {
         let e = Config::from_toml(text, Path::new("old.toml"))
             .unwrap_err()
@@ -371,4 +404,48 @@ fn removed_keys_are_unknown() {
             "{e}"
         );
     }
+}
+
+/// The rule ladder needs its thresholds: over the default (which has none)
+/// choosing it is an error saying where they are; over the paper it runs
+/// with the paper's, and the weighed model ignores them.
+#[test]
+fn the_ladder_needs_its_table() {
+    let e = Config::from_toml(
+        "[plane_map]\ndecision_model = \"ladder\"",
+        Path::new("l.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("l.toml: ") && e.contains("[plane_map.ladder]"),
+        "{e}"
+    );
+    let paper = Config::resolve("paper").unwrap();
+    assert_eq!(Some(paper.plane_map.decision), paper.plane_map.ladder);
+    let weighed = Config::from_toml(
+        "extends = \"paper\"\n[plane_map]\ndecision_model = \"weighed\"",
+        Path::new("w.toml"),
+    )
+    .unwrap();
+    assert_eq!(
+        weighed.plane_map.decision,
+        crate::classify::decide::DecisionParams::WEIGHED
+    );
+    assert!(Config::default().plane_map.ladder.is_none());
+    assert_eq!(
+        Config::default().plane_map.decision,
+        crate::classify::decide::DecisionParams::WEIGHED
+    );
+    assert_eq!(
+        Config::default().single_scan.decision,
+        crate::classify::decide::DecisionParams {
+            free_space_neighbourhood: 1,
+            ..crate::classify::decide::DecisionParams::ZHAO2020
+        }
+    );
+    assert_eq!(
+        paper.single_scan.decision,
+        crate::classify::decide::DecisionParams::ZHAO2020
+    );
 }
