@@ -423,7 +423,7 @@ fn a_wall_seen_past_a_screens_edge_is_not_behind_it() {
     let run = |config: &Config| {
         let out = run_plane_optimized(&seq, config).unwrap();
         let confusion = out.run.confusion.unwrap();
-        let mirrors = out.planes.iter().filter(|p| p.mirror).count();
+        let mirrors = out.planes.iter().filter(|p| p.is_mirror()).count();
         (
             confusion.by_label[1][6],
             mirrors,

@@ -26,7 +26,7 @@ pub enum DecisionModel {
 
 /// Parameters of the plane-map classifier.
 ///
-/// Read from `[plane_map]` (its keys: [`PlaneMapKeys`]); the space map's
+/// Read from `[plane_map]` (four keys and its tables); the space map's
 /// and the hulls' parameters are method constants ([`SPACE`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "PlaneMapKeys", into = "PlaneMapKeys")]
