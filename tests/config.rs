@@ -35,10 +35,10 @@ fn an_empty_file_is_the_default_configuration() {
 
 #[test]
 fn a_one_key_file_changes_that_key_only() {
-    let (_dir, path) = file("one.toml", "[plane_map.decision]\nspace_margin = 0.3\n");
+    let (_dir, path) = file("one.toml", "[plane_map.decision]\nbehind_distance = 0.3\n");
     let mut want = Config::resolve("default").unwrap();
-    assert_ne!(want.plane_map.decision.space_margin, 0.3);
-    want.plane_map.decision.space_margin = 0.3;
+    assert_ne!(want.plane_map.decision.behind_distance, 0.3);
+    want.plane_map.decision.behind_distance = 0.3;
     assert_eq!(resolve(&path), want);
 }
 
@@ -46,10 +46,13 @@ fn a_one_key_file_changes_that_key_only() {
 fn extends_paper_layers_over_the_paper_configuration() {
     let (_dir, path) = file(
         "paper-plus.toml",
-        "extends = \"paper\"\n[plane_map.decision]\nspace_margin = 0.3\n",
+        "extends = \"paper\"\n[plane_map.ladder]\nspace_margin = 0.3\n",
     );
     let mut want = Config::resolve("paper").unwrap();
     want.plane_map.decision.space_margin = 0.3;
+    if let Some(ladder) = want.plane_map.ladder.as_mut() {
+        ladder.space_margin = 0.3;
+    }
     assert_eq!(resolve(&path), want);
     let (_dir, path) = file("default.toml", "extends = \"default\"\nseed = 3\n");
     let mut want = Config::resolve("default").unwrap();
@@ -59,14 +62,17 @@ fn extends_paper_layers_over_the_paper_configuration() {
 
 #[test]
 fn a_misspelt_key_names_the_file_the_key_and_the_suggestion() {
-    let (_dir, path) = file("typo.toml", "[plane_map.decision]\nspace_tset = true\n");
+    let (_dir, path) = file(
+        "typo.toml",
+        "extends = \"paper\"\n[plane_map.ladder]\nspace_tset = true\n",
+    );
     let e = Config::resolve(path.to_str().unwrap())
         .unwrap_err()
         .to_string();
     assert!(e.contains(path.to_str().unwrap()), "{e}");
-    assert!(e.contains("plane_map.decision.space_tset"), "{e}");
+    assert!(e.contains("plane_map.ladder.space_tset"), "{e}");
     assert!(
-        e.contains("did you mean `plane_map.decision.space_test`?"),
+        e.contains("did you mean `plane_map.ladder.space_test`?"),
         "{e}"
     );
 }

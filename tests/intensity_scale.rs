@@ -53,13 +53,10 @@ fn echo_strength_decisions(a: &PlaneOptimizedOutput, b: &PlaneOptimizedOutput) -
 fn the_same_echoes_as_raw_power_or_as_reflectivity_split_alike() {
     let config = Config::default();
     assert_eq!(
-        Config::resolve("default")
-            .unwrap()
-            .plane_map
-            .echo_split
-            .range_exponent,
-        config.plane_map.echo_split.range_exponent
+        Config::resolve("default").unwrap().plane_map.echo_split,
+        config.plane_map.echo_split
     );
+    assert!(config.plane_map.echo_split.is_some());
     let raw = run_plane_optimized(&glass_loop(|_| {}), &config).unwrap();
     // As a sensor that compensates the range reports them.
     let reflectivity = run_plane_optimized(

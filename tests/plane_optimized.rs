@@ -231,8 +231,7 @@ fn reflections_of_a_box_are_mirrored_back_onto_the_box() {
 /// a mirror. Everything outside mirrors to beyond the room's walls, into
 /// space nobody saw, so no point behind the window has its mirror image in
 /// seen-free space; only the reflected paths through the room's walls show
-/// that the ground and hedge outside are transmitted. With that test off the
-/// window is a mirror and every obstacle behind it a Reflection.
+/// that the ground and hedge outside are transmitted.
 #[test]
 fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
     let source = DatasetSource::Simulated {
@@ -250,14 +249,8 @@ fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
         let m = out.run.confusion.unwrap().metrics();
         (m.class(Class::Obstacle).recall, m.table())
     };
-    let on = config("default");
-    assert!(on.plane_map.echo_split.mirror_blocked_paths);
-    let (recall, table) = obstacles(&on);
+    let (recall, table) = obstacles(&config("default"));
     assert!(recall > 20.0, "{table}");
-    let mut off = on.clone();
-    off.plane_map.echo_split.mirror_blocked_paths = false;
-    let (recall, table) = obstacles(&off);
-    assert!(recall < 1.0, "{table}");
 }
 
 /// Moving the world frame moves nothing: the map is fused relative to the
@@ -430,7 +423,7 @@ fn a_wall_seen_past_a_screens_edge_is_not_behind_it() {
     let run = |config: &Config| {
         let out = run_plane_optimized(&seq, config).unwrap();
         let confusion = out.run.confusion.unwrap();
-        let mirrors = out.planes.iter().filter(|p| p.mirror).count();
+        let mirrors = out.planes.iter().filter(|p| p.is_mirror()).count();
         (
             confusion.by_label[1][6],
             mirrors,

@@ -25,8 +25,11 @@ pub enum DecisionModel {
 }
 
 /// Parameters of the plane-map classifier.
+///
+/// Read from `[plane_map]` (four keys and its tables); the space map's
+/// and the hulls' parameters are method constants ([`SPACE`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(try_from = "PlaneMapKeys", into = "PlaneMapKeys")]
 pub struct PlaneMapParams {
     /// How points behind a reflective plane are decided.
     pub decision_model: DecisionModel,
@@ -37,11 +40,6 @@ pub struct PlaneMapParams {
     pub sequence_support: bool,
     /// Voxel size used to thin the sequence's surface points, m.
     pub support_voxel: f64,
-    /// A frame adds its surfaces to the support when the sensor moved this
-    /// far since the last frame that did, m (0 adds every frame).
-    pub support_keyframe_move: f64,
-    /// ... or turned this much, degrees.
-    pub support_keyframe_turn_deg: f64,
     /// Voxel edge of the directly seen space (two-hypothesis test), m.
     pub space_voxel: f64,
     /// Beams that must pass a voxel before it counts as free.
@@ -59,44 +57,158 @@ pub struct PlaneMapParams {
     pub space_keyframe_move: f64,
     /// ... or turned this much, degrees.
     pub space_keyframe_turn_deg: f64,
-    /// Per-landmark split of reflected and transmitted echoes by strength.
-    pub echo_split: EchoSplitParams,
-    /// The decision thresholds and switches (the ladder's; the beam test's
-    /// for both models).
+    /// Per-landmark split of reflected and transmitted echoes by strength
+    /// (`None`: no split).
+    pub echo_split: Option<EchoSplitParams>,
+    /// The decision thresholds and switches in use: the ladder's
+    /// (`[plane_map.ladder]`) with the ladder, [`DecisionParams::WEIGHED`]
+    /// with the weighed model; `glass_distance` and `behind_distance` from
+    /// `[plane_map.decision]` for both.
     pub decision: DecisionParams,
+    /// The rule ladder's thresholds and switches as configured
+    /// (`[plane_map.ladder]`, required by `decision_model = "ladder"`).
+    pub ladder: Option<DecisionParams>,
     /// Glass or mirror per landmark.
     pub mirror: MirrorParams,
     /// The evidence weighed behind reflective planes.
     pub weighing: WeighingParams,
 }
 
-impl Default for PlaneMapParams {
-    fn default() -> Self {
-        Self {
-            decision_model: DecisionModel::Weighed,
-            mirror: MirrorParams::default(),
-            weighing: WeighingParams::default(),
+/// The space seen directly, method constants: 0.1 m voxels are set by
+/// `plane_map.space_voxel`; a voxel is free after 2 beams passed it and
+/// blocks a path after 5 returns (stray returns do not); one column in 3
+/// carves (1.8 degrees apart, about the ring spacing); carving stops 5 % of
+/// the range (and two voxels) short of the endpoint; a keyframe carves
+/// whenever the sensor moved 0.25 m or turned 10 degrees. The hulls are not
+/// grown.
+pub struct SpaceConstants {
+    /// Beams that must pass a voxel before it counts as free.
+    pub min_passes: u8,
+    /// Returns from a voxel needed before it blocks a path.
+    pub block_hits: u8,
+    /// One beam column in this many carves.
+    pub column_stride: usize,
+    /// Carving stops this share of the range before the endpoint.
+    pub stop_ratio: f64,
+    /// Keyframe spacing, m.
+    pub keyframe_move: f64,
+    /// Keyframe spacing, degrees.
+    pub keyframe_turn_deg: f64,
+}
+
+/// The space map's constants ([`SpaceConstants`]).
+pub const SPACE: SpaceConstants = SpaceConstants {
+    min_passes: 2,
+    block_hits: 5,
+    column_stride: 3,
+    stop_ratio: 0.05,
+    keyframe_move: 0.25,
+    keyframe_turn_deg: 10.0,
+};
+
+/// The keys of `[plane_map]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlaneMapKeys {
+    /// How points behind a reflective plane are decided: `weighed` or the
+    /// paper's `ladder`.
+    decision_model: DecisionModel,
+    /// Use the observed surfaces of all frames (every frame that moved) as
+    /// mirror support (the paper: the current frame only).
+    sequence_support: bool,
+    /// Voxel edge that thins the sequence's surface points, m.
+    support_voxel: f64,
+    /// Voxel edge of the space seen directly, m.
+    space_voxel: f64,
+    /// The echo split (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    echo_split: Option<EchoSplitParams>,
+    /// The beam test's distances, both models.
+    decision: BeamKeys,
+    /// The rule ladder (absent: only the weighed model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ladder: Option<DecisionParams>,
+    #[serde(default)]
+    mirror: MirrorParams,
+    #[serde(default)]
+    weighing: WeighingParams,
+}
+
+/// The keys of `[plane_map.decision]`: the beam test's distances.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BeamKeys {
+    /// A point within this range of a plane's crossing along its beam is on
+    /// the surface (glass), m.
+    glass_distance: f64,
+    /// A point farther than this behind the crossing is behind the plane,
+    /// m (between `glass_distance` and this: ambiguous).
+    behind_distance: f64,
+}
+
+impl TryFrom<PlaneMapKeys> for PlaneMapParams {
+    type Error = String;
+
+    fn try_from(k: PlaneMapKeys) -> Result<Self, String> {
+        let beam = |d: DecisionParams| DecisionParams {
+            glass_distance: k.decision.glass_distance,
+            behind_distance: k.decision.behind_distance,
+            ..d
+        };
+        let decision = match (k.decision_model, k.ladder) {
+            (DecisionModel::Weighed, _) => beam(DecisionParams::WEIGHED),
+            (DecisionModel::Ladder, Some(ladder)) => beam(ladder),
+            (DecisionModel::Ladder, None) => {
+                return Err("plane_map.decision_model = \"ladder\" needs the ladder's \
+                     thresholds, [plane_map.ladder] (configs/paper.toml states the \
+                     paper's: extends = \"paper\")"
+                    .into())
+            }
+        };
+        Ok(Self {
+            decision_model: k.decision_model,
             hull_margin: 0.0,
-            sequence_support: false,
-            support_voxel: 0.05,
-            support_keyframe_move: 0.0,
-            support_keyframe_turn_deg: 0.0,
-            space_voxel: 0.1,
-            space_min_passes: 2,
-            space_block_hits: 5,
-            space_column_stride: 1,
-            space_stop_ratio: 0.05,
-            space_keyframe_move: 0.25,
-            space_keyframe_turn_deg: 10.0,
-            echo_split: EchoSplitParams::default(),
-            decision: DecisionParams {
-                depth_margin: 0.1,
-                obstacle_tests_on_all_returns: true,
-                support_test: true,
-                support_radius: 0.316,
-                ..DecisionParams::default()
+            sequence_support: k.sequence_support,
+            support_voxel: k.support_voxel,
+            space_voxel: k.space_voxel,
+            space_min_passes: SPACE.min_passes,
+            space_block_hits: SPACE.block_hits,
+            space_column_stride: SPACE.column_stride,
+            space_stop_ratio: SPACE.stop_ratio,
+            space_keyframe_move: SPACE.keyframe_move,
+            space_keyframe_turn_deg: SPACE.keyframe_turn_deg,
+            echo_split: k.echo_split,
+            decision,
+            ladder: k.ladder.map(beam),
+            mirror: k.mirror,
+            weighing: k.weighing,
+        })
+    }
+}
+
+impl From<PlaneMapParams> for PlaneMapKeys {
+    fn from(p: PlaneMapParams) -> Self {
+        Self {
+            decision_model: p.decision_model,
+            sequence_support: p.sequence_support,
+            support_voxel: p.support_voxel,
+            space_voxel: p.space_voxel,
+            echo_split: p.echo_split,
+            decision: BeamKeys {
+                glass_distance: p.decision.glass_distance,
+                behind_distance: p.decision.behind_distance,
             },
+            ladder: p.ladder,
+            mirror: p.mirror,
+            weighing: p.weighing,
         }
+    }
+}
+
+impl Default for PlaneMapParams {
+    /// `[plane_map]` of `configs/default.toml`.
+    fn default() -> Self {
+        crate::config::default_section("plane_map")
     }
 }
 

@@ -22,16 +22,19 @@ pub enum BoundaryModel {
     Hull,
 }
 
-/// Parameters of the single-scan classifier.
+/// Parameters of the single-scan classifier: Zhao 2020's method, its
+/// constants in code ([`DecisionParams::ZHAO2020`], [`WINDOW_RING_PAD`],
+/// [`WINDOW_MIN_DEG`]); the configuration chooses the boundary and the
+/// free-space neighbourhood (`[single_scan]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(from = "SingleScanKeys", into = "SingleScanKeys")]
 pub struct SingleScanParams {
     /// Boundary model.
     pub boundary: BoundaryModel,
     /// Rings added above and below the window.
     pub window_ring_pad: usize,
     /// Windows narrower than this (degrees of azimuth) cover the whole
-    /// revolution (Zhao 2020: 81 columns of 0.6 degrees).
+    /// revolution.
     pub window_min_deg: f64,
     /// Hull growth, metres (hull boundary only).
     pub hull_margin: f64,
@@ -39,15 +42,53 @@ pub struct SingleScanParams {
     pub decision: DecisionParams,
 }
 
-impl Default for SingleScanParams {
-    fn default() -> Self {
+/// Zhao 2020's window: one ring added above and below the inliers' rings.
+pub const WINDOW_RING_PAD: usize = 1;
+/// Zhao 2020's window: narrower than 48.6 degrees of azimuth (81 columns of
+/// 0.6 degrees) it covers the whole revolution.
+pub const WINDOW_MIN_DEG: f64 = 48.6;
+
+/// The keys of `[single_scan]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SingleScanKeys {
+    /// Boundary model: `window` (Zhao 2020) or `hull` (the paper's).
+    boundary: BoundaryModel,
+    /// Rings and columns around the mirrored point's cell that must all show
+    /// free space, cells: 0 the cell alone (Zhao 2020), 1 the 3 x 3 block
+    /// (robust to the ring and column quantisation of the mirrored
+    /// direction).
+    free_space_neighbourhood: usize,
+}
+
+impl From<SingleScanKeys> for SingleScanParams {
+    fn from(k: SingleScanKeys) -> Self {
         Self {
-            boundary: BoundaryModel::Window,
-            window_ring_pad: 1,
-            window_min_deg: 48.6,
+            boundary: k.boundary,
+            window_ring_pad: WINDOW_RING_PAD,
+            window_min_deg: WINDOW_MIN_DEG,
             hull_margin: 0.0,
-            decision: DecisionParams::default(),
+            decision: DecisionParams {
+                free_space_neighbourhood: k.free_space_neighbourhood,
+                ..DecisionParams::ZHAO2020
+            },
         }
+    }
+}
+
+impl From<SingleScanParams> for SingleScanKeys {
+    fn from(p: SingleScanParams) -> Self {
+        Self {
+            boundary: p.boundary,
+            free_space_neighbourhood: p.decision.free_space_neighbourhood,
+        }
+    }
+}
+
+impl Default for SingleScanParams {
+    /// `[single_scan]` of `configs/default.toml`.
+    fn default() -> Self {
+        crate::config::default_section("single_scan")
     }
 }
 

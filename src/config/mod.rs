@@ -134,10 +134,22 @@ const OPTIONAL_KEYS: &[(&str, f64)] = &[
     ("backend.odometry_free_rotation_sigma", 0.1),
 ];
 
+/// Optional tables (an `Option` each: absent is off) that
+/// `configs/default.toml` leaves out, with the built-in that states them:
+/// their keys are valid in a configuration file all the same.
+const OPTIONAL_TABLES: &[(&str, &str, &str)] = &[("plane_map", "ladder", "paper")];
+
 /// The keys a configuration file may name: the default file's and the
 /// optional ones it leaves out.
 fn known_keys() -> toml::Table {
     let mut known = builtin_table(DEFAULT_BASE);
+    for (parent, name, builtin) in OPTIONAL_TABLES {
+        let from = builtin_table(builtin);
+        let table = from[*parent][*name].clone();
+        if let Some(toml::Value::Table(p)) = known.get_mut(*parent) {
+            p.insert((*name).into(), table);
+        }
+    }
     for (path, value) in OPTIONAL_KEYS {
         let mut table = &mut known;
         let mut keys: Vec<&str> = path.split('.').collect();

@@ -50,7 +50,7 @@ fn default_is_the_default_file() {
 /// impl, and states no key the default file does not know.
 #[test]
 fn builtins_are_complete() {
-    let known = paths(&builtin_table(DEFAULT_BASE));
+    let known = paths(&known_keys());
     for name in Config::builtin_names() {
         let Ok(toml::Value::Table(serialised)) =
             toml::Value::try_from(Config::resolve(name).unwrap())
@@ -66,17 +66,8 @@ fn builtins_are_complete() {
 }
 
 /// Sections whose struct's `Default` may still differ from
-/// `configs/default.toml`: owned by the decision-model rewrite of issue 38;
-/// to be emptied.
-const DEFAULTS_MAY_DIFFER: &[&str] = &[
-    "single_scan",
-    "single_scan.decision",
-    "plane_map",
-    "plane_map.echo_split",
-    "plane_map.decision",
-    "map.evidence",
-    "map.ghosts",
-];
+/// `configs/default.toml` (none left).
+const DEFAULTS_MAY_DIFFER: &[&str] = &[];
 
 /// A section's struct's `Default` as TOML, the default file's table at the
 /// same path, and both compared key by key: the first key that differs.
@@ -120,10 +111,6 @@ fn section_defaults_are_the_default_file() {
         ("input", value(InputParams::default())),
         ("detector", value(DetectorParams::default())),
         ("single_scan", value(SingleScanParams::default())),
-        (
-            "single_scan.decision",
-            value(SingleScanParams::default().decision),
-        ),
         ("map", value(MapParams::default())),
         ("map.merge", value(crate::map::MergeParams::default())),
         ("map.evidence", value(crate::map::EvidenceParams::default())),
@@ -132,11 +119,7 @@ fn section_defaults_are_the_default_file() {
         ("plane_map", value(PlaneMapParams::default())),
         (
             "plane_map.echo_split",
-            value(PlaneMapParams::default().echo_split),
-        ),
-        (
-            "plane_map.decision",
-            value(PlaneMapParams::default().decision),
+            value(crate::reflect::EchoSplitParams::default()),
         ),
         ("extractor", value(ExtractorParams::default())),
         (
@@ -198,7 +181,7 @@ fn section_defaults_are_the_default_file() {
         "extractor.ransac",
         "extractor.ground.ransac",
     ]);
-    covered.extend(["backend.robust"]);
+    covered.extend(["backend.robust", "plane_map.decision"]);
     // The evidence tests' tables are compared as part of their weighing's.
     covered.extend([
         "plane_map.weighing.seen_space",
@@ -258,20 +241,20 @@ fn an_empty_file_is_the_default() {
 
 #[test]
 fn a_file_changes_only_its_keys() {
-    let text = "seed = 7\n[plane_map.decision]\nspace_margin = 0.3\n[map.panes]\ncontext = 2.0";
+    let text = "seed = 7\n[plane_map.decision]\nbehind_distance = 0.3\n[map.panes]\ncontext = 2.0";
     let (c, layering) = Config::from_toml_layered(text, Path::new("c.toml")).unwrap();
     let mut want = Config {
         seed: 7,
         ..Config::default()
     };
-    want.plane_map.decision.space_margin = 0.3;
+    want.plane_map.decision.behind_distance = 0.3;
     want.map.panes.context = 2.0;
     assert_eq!(c, want);
     assert_eq!(
         layering.keys,
         [
             "map.panes.context",
-            "plane_map.decision.space_margin",
+            "plane_map.decision.behind_distance",
             "seed"
         ]
     );
@@ -281,10 +264,13 @@ fn a_file_changes_only_its_keys() {
         layering.comment()
     );
 
-    let text = "extends = \"paper\"\n[plane_map.decision]\nspace_margin = 0.3";
+    let text = "extends = \"paper\"\n[plane_map.ladder]\nspace_margin = 0.3";
     let (c, layering) = Config::from_toml_layered(text, Path::new("c.toml")).unwrap();
     let mut want = Config::resolve("paper").unwrap();
     want.plane_map.decision.space_margin = 0.3;
+    if let Some(ladder) = want.plane_map.ladder.as_mut() {
+        ladder.space_margin = 0.3;
+    }
     assert_eq!(c, want);
     assert_eq!(layering.extends, "paper");
 }
@@ -312,15 +298,15 @@ fn changing_a_tagged_table_variant_replaces_it() {
 #[test]
 fn misspelt_keys_suggest_the_closest() {
     let e = Config::from_toml(
-        "[plane_map.decision]\nspace_tset = true",
+        "extends = \"paper\"\n[plane_map.ladder]\nspace_tset = true",
         Path::new("my.toml"),
     )
     .unwrap_err()
     .to_string();
     assert!(e.starts_with("my.toml: "), "{e}");
-    assert!(e.contains("`plane_map.decision.space_tset`"), "{e}");
+    assert!(e.contains("`plane_map.ladder.space_tset`"), "{e}");
     assert!(
-        e.contains("did you mean `plane_map.decision.space_test`?"),
+        e.contains("did you mean `plane_map.ladder.space_test`?"),
         "{e}"
     );
     let e = Config::from_toml("[plane_mapp]\nhull_margin = 1.0", Path::new("my.toml"))
@@ -394,6 +380,39 @@ fn removed_keys_are_unknown() {
             "[detector.intensity_peak]\npeak_min = 35.0",
             "detector.intensity_peak",
         ),
+        (
+            "[single_scan.decision]\ndepth_test = true",
+            "single_scan.decision",
+        ),
+        (
+            "[single_scan]\nwindow_min_deg = 48.6",
+            "single_scan.window_min_deg",
+        ),
+        (
+            "[plane_map]\nspace_min_passes = 2",
+            "plane_map.space_min_passes",
+        ),
+        (
+            "[plane_map]\nsupport_keyframe_move = 0.0",
+            "plane_map.support_keyframe_move",
+        ),
+        (
+            "[plane_map.decision]\nwall_echo_test = true",
+            "plane_map.decision.wall_echo_test",
+        ),
+        (
+            "[plane_map.echo_split]\nenabled = true",
+            "plane_map.echo_split.enabled",
+        ),
+        (
+            "[plane_map.echo_split]\nmirror_blocked_paths = true",
+            "plane_map.echo_split.mirror_blocked_paths",
+        ),
+        (
+            "[map.evidence]\necho_reach = 1.0",
+            "map.evidence.echo_reach",
+        ),
+        ("[map.ghosts]\nradius = 0.3", "map.ghosts.radius"),
     ] {
         let e = Config::from_toml(text, Path::new("old.toml"))
             .unwrap_err()
@@ -403,4 +422,48 @@ fn removed_keys_are_unknown() {
             "{e}"
         );
     }
+}
+
+/// The rule ladder needs its thresholds: over the default (which has none)
+/// choosing it is an error saying where they are; over the paper it runs
+/// with the paper's, and the weighed model ignores them.
+#[test]
+fn the_ladder_needs_its_table() {
+    let e = Config::from_toml(
+        "[plane_map]\ndecision_model = \"ladder\"",
+        Path::new("l.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("l.toml: ") && e.contains("[plane_map.ladder]"),
+        "{e}"
+    );
+    let paper = Config::resolve("paper").unwrap();
+    assert_eq!(Some(paper.plane_map.decision), paper.plane_map.ladder);
+    let weighed = Config::from_toml(
+        "extends = \"paper\"\n[plane_map]\ndecision_model = \"weighed\"",
+        Path::new("w.toml"),
+    )
+    .unwrap();
+    assert_eq!(
+        weighed.plane_map.decision,
+        crate::classify::decide::DecisionParams::WEIGHED
+    );
+    assert!(Config::default().plane_map.ladder.is_none());
+    assert_eq!(
+        Config::default().plane_map.decision,
+        crate::classify::decide::DecisionParams::WEIGHED
+    );
+    assert_eq!(
+        Config::default().single_scan.decision,
+        crate::classify::decide::DecisionParams {
+            free_space_neighbourhood: 1,
+            ..crate::classify::decide::DecisionParams::ZHAO2020
+        }
+    );
+    assert_eq!(
+        paper.single_scan.decision,
+        crate::classify::decide::DecisionParams::ZHAO2020
+    );
 }

@@ -10,10 +10,6 @@ impl Config {
         let positive = [
             ("detector.dual_gap", d.dual_gap),
             ("detector.ransac.distance", d.ransac.distance),
-            (
-                "single_scan.decision.glass_distance",
-                self.single_scan.decision.glass_distance,
-            ),
             ("input.pose_tolerance", self.input.pose_tolerance),
             (
                 "plane_map.decision.glass_distance",
@@ -74,15 +70,9 @@ impl Config {
                 "slam.window must be at least 2 frames (leave it out for no window), got {w}"
             ));
         }
-        for (name, dec) in [
-            ("single_scan", &self.single_scan.decision),
-            ("plane_map", &self.plane_map.decision),
-        ] {
-            if dec.behind_distance < dec.glass_distance {
-                return Err(format!(
-                    "{name}.decision.behind_distance must be >= glass_distance"
-                ));
-            }
+        let dec = &self.plane_map.decision;
+        if dec.behind_distance < dec.glass_distance {
+            return Err("plane_map.decision.behind_distance must be >= glass_distance".into());
         }
         if self.extractor.min_points < 3 {
             return Err("extractor.min_points must be at least 3".into());

@@ -15,9 +15,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::reflect::BoundedPlane;
 
-/// Settings of the ghost-landmark test.
+/// Settings of the ghost-landmark test: `[map.ghosts]` switches it; the
+/// rest are the method's constants ([`GhostParams::METHOD`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(from = "GhostKeys", into = "GhostKeys")]
 pub struct GhostParams {
     /// Drop reflective landmarks found to be reflections of seen surfaces.
     pub enabled: bool,
@@ -36,15 +37,48 @@ pub struct GhostParams {
     pub glass_reach: f64,
 }
 
-impl Default for GhostParams {
-    fn default() -> Self {
+/// The keys of `[map.ghosts]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GhostKeys {
+    /// Drop reflective landmarks found to be reflections of seen surfaces.
+    enabled: bool,
+}
+
+impl From<GhostKeys> for GhostParams {
+    fn from(k: GhostKeys) -> Self {
         Self {
-            enabled: false,
-            min_share: 0.5,
-            min_depth: 0.3,
-            radius: 0.3,
-            glass_reach: 5.0,
+            enabled: k.enabled,
+            ..Self::METHOD
         }
+    }
+}
+
+impl From<GhostParams> for GhostKeys {
+    fn from(p: GhostParams) -> Self {
+        Self { enabled: p.enabled }
+    }
+}
+
+impl GhostParams {
+    /// The test's method: a landmark lying wholly 0.3 m or more behind
+    /// another, whose mirror image across it lands within 0.3 m of
+    /// surfaces seen directly over at least half of its extent (the parts
+    /// whose foot on the glass lies within 5 m of its extent), is a ghost.
+    /// Switched off; `configs/default.toml` switches it on.
+    pub const METHOD: Self = Self {
+        enabled: false,
+        min_share: 0.5,
+        min_depth: 0.3,
+        radius: 0.3,
+        glass_reach: 5.0,
+    };
+}
+
+impl Default for GhostParams {
+    /// `[map.ghosts]` of `configs/default.toml`.
+    fn default() -> Self {
+        crate::config::default_section("map.ghosts")
     }
 }
 
@@ -238,7 +272,7 @@ mod tests {
     fn switched_on() -> GhostParams {
         GhostParams {
             enabled: true,
-            ..GhostParams::default()
+            ..GhostParams::METHOD
         }
     }
 
@@ -270,7 +304,7 @@ mod tests {
         assert!(find_ghosts(
             &[glass, ghost, real],
             &path,
-            &GhostParams::default(),
+            &GhostParams::METHOD,
             wall_seen
         )
         .is_empty());

@@ -25,12 +25,12 @@ const LOG_MAX: f64 = 7.0;
 const BIN: f64 = 0.05;
 const BINS: usize = ((LOG_MAX - LOG_MIN) / BIN) as usize;
 
-/// Settings of the per-landmark echo split.
+/// Settings of the per-landmark echo split: `[plane_map.echo_split]` sets
+/// the range exponent and the separation; the rest are the method's
+/// constants (see [`EchoSplitParams::default`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(from = "EchoSplitKeys", into = "EchoSplitKeys")]
 pub struct EchoSplitParams {
-    /// Learn and use the split.
-    pub enabled: bool,
     /// Echo strength is corrected by the range to this power: `auto`
     /// takes it from what the frames' intensities measure (0 for a
     /// reflectivity, 2 for a raw power falling with the square of the
@@ -56,56 +56,66 @@ pub struct EchoSplitParams {
     /// and bright materials, near and far pane sides) and would call the
     /// bright real surfaces behind the glass reflections.
     pub reflection_is_weaker: bool,
-    /// A landmark is a mirror when at most this share of the points behind
-    /// it are anchors (transmitted for sure), over at least
-    /// `mirror_min_behind` points: glass transmits, a mirror never does
-    /// (0: never a mirror).
-    pub mirror_max_anchor_share: f64,
-    /// Points behind a landmark needed to call it a mirror.
-    pub mirror_min_behind: u64,
-    /// A landmark whose echoes behind it fall in two groups at least
-    /// `min_separation` apart is glass, never a mirror, whatever its
-    /// anchors: a mirror transmits nothing, so everything behind it is one
-    /// population of reflections, while glass returns weak reflections and
-    /// strong transmitted echoes. Anchors alone fail where the scene is its
-    /// own mirror image (a glass door across a corridor: no mirror image
-    /// ever lands in free space). A landmark with a fitted split is glass
-    /// by the same reasoning.
-    pub mirror_needs_one_group: bool,
     /// With fewer than `min_anchors` anchors, orient a split by physics
     /// alone when `reflection_is_weaker`: the weak group is the reflections
     /// (anchors that exist must still agree).
     pub orient_without_anchors: bool,
-    /// The mirror test counts as transmitted for sure every point whose
-    /// mirror hypothesis the seen space refutes by either test of the
-    /// decision: the mirror image in seen-free space (an anchor), or the
-    /// reflected path through a seen surface (with the real position not
-    /// refuted). With anchors alone, a room looking out through a window
-    /// has none: everything outside mirrors to beyond the room's walls,
-    /// into space nobody saw, and the window is taken for a mirror. The
-    /// split's orientation keeps the anchors alone: at grazing angles a
-    /// reflected path clips wall voxels, too few to make a window of a
-    /// mirror but enough to outvote a split's anchors.
-    pub mirror_blocked_paths: bool,
+}
+
+/// The keys of `[plane_map.echo_split]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EchoSplitKeys {
+    /// The range exponent `k` of the echo strength log10(I r^k / cos):
+    /// `auto` or a number.
+    range_exponent: RangeExponent,
+    /// The two groups' means must differ by this many decades.
+    min_separation: f64,
+}
+
+impl From<EchoSplitKeys> for EchoSplitParams {
+    fn from(k: EchoSplitKeys) -> Self {
+        Self {
+            range_exponent: k.range_exponent,
+            min_separation: k.min_separation,
+            ..Self::METHOD
+        }
+    }
+}
+
+impl From<EchoSplitParams> for EchoSplitKeys {
+    fn from(p: EchoSplitParams) -> Self {
+        Self {
+            range_exponent: p.range_exponent,
+            min_separation: p.min_separation,
+        }
+    }
+}
+
+impl EchoSplitParams {
+    /// The split's method: strengths corrected by the incidence; at least
+    /// 30 anchors, three quarters of them on the transmitted side, orient a
+    /// split, and with none the weaker group is the reflections (glass
+    /// reflects less than it transmits), a split whose anchors fall on the
+    /// weak side being no split; points within 0.1 decades of the threshold
+    /// are left to the other tests. `range_exponent` auto and
+    /// `min_separation` 0.8 decades, as `configs/default.toml` sets them.
+    pub const METHOD: Self = Self {
+        range_exponent: RangeExponent::Auto(Auto::Auto),
+        incidence_correction: true,
+        min_separation: 0.8,
+        min_anchors: 30,
+        min_anchor_agreement: 0.75,
+        band: 0.1,
+        reflection_is_weaker: true,
+        orient_without_anchors: true,
+    };
 }
 
 impl Default for EchoSplitParams {
+    /// [`EchoSplitParams::METHOD`].
     fn default() -> Self {
-        Self {
-            enabled: false,
-            range_exponent: RangeExponent::Auto(Auto::Auto),
-            incidence_correction: false,
-            min_separation: 0.8,
-            min_anchors: 30,
-            min_anchor_agreement: 0.75,
-            band: 0.1,
-            reflection_is_weaker: false,
-            mirror_max_anchor_share: 0.0,
-            mirror_min_behind: 1000,
-            mirror_needs_one_group: false,
-            orient_without_anchors: false,
-            mirror_blocked_paths: false,
-        }
+        Self::METHOD
     }
 }
 
@@ -281,21 +291,6 @@ fn centre(bin: usize) -> f64 {
     LOG_MIN + (bin as f64 + 0.5) * BIN
 }
 
-/// Whether the points behind a landmark say it is a mirror: many points,
-/// and almost none of them transmitted for sure (their mirror image lies in
-/// space seen free).
-pub fn is_mirror(all: &EchoHistogram, transmitted: u64, p: &EchoSplitParams) -> bool {
-    let n = all.total();
-    let two_groups = || {
-        all.otsu()
-            .is_some_and(|(_, m0, m1)| (m1 - m0).abs() >= p.min_separation)
-    };
-    p.mirror_max_anchor_share > 0.0
-        && n >= p.mirror_min_behind
-        && (transmitted as f64) <= p.mirror_max_anchor_share * n as f64
-        && !(p.mirror_needs_one_group && two_groups())
-}
-
 /// A landmark's learned split between transmitted and reflected echoes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EchoSplit {
@@ -405,7 +400,12 @@ mod tests {
         let strong: Vec<f64> = (0..800).map(|_| 3.5 + 0.4 * rng.unit()).collect();
         let all = histogram(weak.iter().chain(&strong).copied());
         let anchors = histogram(strong.iter().take(100).copied());
-        let p = EchoSplitParams::default();
+        let p = EchoSplitParams {
+            incidence_correction: false,
+            reflection_is_weaker: false,
+            orient_without_anchors: false,
+            ..EchoSplitParams::default()
+        };
         let split = EchoSplit::fit(&all, &anchors, &p, 2.0).expect("a split");
         assert!(split.threshold > 2.3 && split.threshold < 3.5, "{split:?}");
         assert!(split.weak_is_reflection);
@@ -442,51 +442,25 @@ mod tests {
         assert!(EchoSplit::fit(&one, &anchors, &p, 2.0).is_none());
     }
 
-    /// Many points behind a landmark and none transmitted for sure: a
-    /// mirror; a few anchors, too few points, or the test off: not.
-    #[test]
-    fn a_landmark_that_transmits_nothing_is_a_mirror() {
-        let p = EchoSplitParams {
-            mirror_max_anchor_share: 0.002,
-            ..EchoSplitParams::default()
-        };
-        let all = histogram((0..5000).map(|k| 2.0 + (k % 50) as f64 * 0.02));
-        assert!(is_mirror(&all, 0, &p));
-        assert!(is_mirror(&all, 10, &p));
-        assert!(!is_mirror(&all, 50, &p));
-        let few = histogram([3.0; 500]);
-        assert!(!is_mirror(&few, 0, &p));
-        let off = EchoSplitParams::default();
-        assert!(!is_mirror(&all, 0, &off));
-    }
-
     /// Glass behind which the scene is its own mirror image (a door across
-    /// a corridor) has no anchors at all: its two echo groups still make it
-    /// glass, not a mirror, and orient by physics (reflections weaker) when
-    /// switched on; one group with no anchors stays a mirror.
+    /// a corridor) has no anchors at all: its two echo groups orient by
+    /// physics (reflections weaker) when switched on.
     #[test]
-    fn without_anchors_two_groups_are_glass_oriented_by_physics() {
+    fn without_anchors_two_groups_are_oriented_by_physics() {
         let mut rng = crate::rng::SplitMix64::new(7);
         let weak: Vec<f64> = (0..600).map(|_| 2.0 + 0.3 * rng.unit()).collect();
         let strong: Vec<f64> = (0..900).map(|_| 3.5 + 0.4 * rng.unit()).collect();
         let two = histogram(weak.iter().chain(&strong).copied());
-        let one = histogram(strong.iter().copied());
         let none = EchoHistogram::default();
         let old = EchoSplitParams {
-            enabled: true,
             reflection_is_weaker: true,
-            mirror_max_anchor_share: 0.002,
-            mirror_min_behind: 500,
+            orient_without_anchors: false,
             ..EchoSplitParams::default()
         };
         let new = EchoSplitParams {
-            mirror_needs_one_group: true,
             orient_without_anchors: true,
             ..old
         };
-        assert!(is_mirror(&two, none.total(), &old));
-        assert!(!is_mirror(&two, none.total(), &new));
-        assert!(is_mirror(&one, none.total(), &new));
         assert_eq!(EchoSplit::fit(&two, &none, &old, 2.0), None);
         let split = EchoSplit::fit(&two, &none, &new, 2.0).expect("a split by physics");
         assert!(split.weak_is_reflection);

@@ -45,7 +45,7 @@ pub struct BoundedPlane {
     pub echo_split: Option<EchoSplit>,
     /// The probability that the plane is a mirror (nothing behind it is
     /// real) rather than glass, from all of its evidence over the sequence
-    /// ([`glass_or_mirror`](crate::map::glass_or_mirror)), when estimated.
+    /// ([`glass_or_mirror`](mod@crate::map::glass_or_mirror)), when estimated.
     pub mirror_probability: Option<f64>,
 }
 

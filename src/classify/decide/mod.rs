@@ -72,15 +72,23 @@ use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
 
 /// Thresholds and switches of the decision procedure.
+///
+/// Only the rule ladder's are configuration keys (`[plane_map.ladder]` of
+/// `configs/paper.toml`, every key stated; `glass_distance` and
+/// `behind_distance` come from `[plane_map.decision]`): the single-scan
+/// baseline uses [`DecisionParams::ZHAO2020`], the weighed classifier
+/// [`DecisionParams::WEIGHED`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(deny_unknown_fields)]
 pub struct DecisionParams {
     /// Points within this range of the plane's crossing along their beam are
     /// on the surface, m.
+    #[serde(skip, default = "glass_distance")]
     pub glass_distance: f64,
     /// Points farther than this behind the crossing (along the beam) are
     /// behind the plane, m (between `glass_distance` and this they are
     /// ambiguous).
+    #[serde(skip, default = "glass_distance")]
     pub behind_distance: f64,
     /// Use the depth test.
     pub depth_test: bool,
@@ -207,39 +215,98 @@ pub struct DecisionParams {
     pub perpendicular_support_deg: f64,
 }
 
+/// The 0.1 m of `glass_distance` and `behind_distance` until
+/// `[plane_map.decision]` sets them (serde's default for a ladder table).
+fn glass_distance() -> f64 {
+    0.1
+}
+
+impl DecisionParams {
+    /// Zhao 2020's single-scan decision (the baseline the paper compares
+    /// against): the depth and free-space tests on last returns, a fixed
+    /// 0.1 m free-space margin, the mirrored point's cell alone, and the
+    /// dual-return rule; none of the sequence's evidence.
+    pub const ZHAO2020: Self = Self {
+        glass_distance: 0.1,
+        behind_distance: 0.1,
+        depth_test: true,
+        depth_margin: 0.0,
+        free_space_test: true,
+        free_space_margin: 0.1,
+        free_space_margin_ratio: 0.0,
+        free_space_neighbourhood: 0,
+        obstacle_tests_on_all_returns: false,
+        support_test: false,
+        support_range: 0.1,
+        support_radius: 0.0,
+        support_excludes_own_surface: false,
+        support_behind_test: false,
+        support_behind: 0.2,
+        dual_return_rule: true,
+        dual_gap: 0.1,
+        ambiguous: Class::Unclassified,
+        wall_echo_test: false,
+        oblique_single_echo_deg: 0.0,
+        space_test: false,
+        space_margin: 0.2,
+        space_clearance_ratio: 0.0,
+        seen_surface_test: false,
+        seen_surface_echo_reach: 0.0,
+        echo_strength_past_second_pane: false,
+        unseen_extent: 0.0,
+        pane_edge_margin: 0.0,
+        perpendicular_support_deg: 0.0,
+    };
+
+    /// What the weighed classifier (`plane_map.decision_model = "weighed"`)
+    /// takes from the decision procedure: its beam test (a single echo
+    /// brighter than the plane's glass echoes is wall; one beyond 30 deg
+    /// from the normal, brighter than its glass echoes, a mullion or sill;
+    /// glass may continue 1 m past its last echo; a point found real is an
+    /// Obstacle only with glass echoes within 0.6 m of its beam's crossing),
+    /// the space seen directly from every pose (always tested), the
+    /// sequence's surface support within 0.316 m (the paper's 0.1 m²
+    /// squared radius) but not more than 0.2 m behind a seen surface, and a
+    /// 0.15 m margin at a pane's edge (panes overreach by about half a
+    /// 0.2 m evidence cell). `glass_distance` and `behind_distance` come
+    /// from `[plane_map.decision]`.
+    pub const WEIGHED: Self = Self {
+        glass_distance: 0.1,
+        behind_distance: 0.1,
+        depth_test: true,
+        depth_margin: 0.1,
+        free_space_test: true,
+        free_space_margin: 0.1,
+        free_space_margin_ratio: 0.01,
+        free_space_neighbourhood: 1,
+        obstacle_tests_on_all_returns: true,
+        support_test: true,
+        support_range: 0.1,
+        support_radius: 0.316,
+        support_excludes_own_surface: true,
+        support_behind_test: true,
+        support_behind: 0.2,
+        dual_return_rule: true,
+        dual_gap: 0.1,
+        ambiguous: Class::Unclassified,
+        wall_echo_test: true,
+        oblique_single_echo_deg: 30.0,
+        space_test: true,
+        space_margin: 0.2,
+        space_clearance_ratio: 0.02,
+        seen_surface_test: true,
+        seen_surface_echo_reach: 0.6,
+        echo_strength_past_second_pane: true,
+        unseen_extent: 1.0,
+        pane_edge_margin: 0.15,
+        perpendicular_support_deg: 0.0,
+    };
+}
+
 impl Default for DecisionParams {
+    /// [`DecisionParams::ZHAO2020`].
     fn default() -> Self {
-        Self {
-            glass_distance: 0.1,
-            behind_distance: 0.1,
-            depth_test: true,
-            depth_margin: 0.0,
-            free_space_test: true,
-            free_space_margin: 0.1,
-            free_space_margin_ratio: 0.0,
-            free_space_neighbourhood: 0,
-            obstacle_tests_on_all_returns: false,
-            support_test: false,
-            support_range: 0.1,
-            support_radius: 0.0,
-            support_excludes_own_surface: false,
-            support_behind_test: false,
-            support_behind: 0.2,
-            dual_return_rule: true,
-            dual_gap: 0.1,
-            ambiguous: Class::Unclassified,
-            wall_echo_test: false,
-            oblique_single_echo_deg: 0.0,
-            space_test: false,
-            space_margin: 0.2,
-            space_clearance_ratio: 0.0,
-            seen_surface_test: false,
-            seen_surface_echo_reach: 0.0,
-            echo_strength_past_second_pane: false,
-            unseen_extent: 0.0,
-            pane_edge_margin: 0.0,
-            perpendicular_support_deg: 0.0,
-        }
+        Self::ZHAO2020
     }
 }
 

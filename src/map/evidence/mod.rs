@@ -41,9 +41,12 @@ use crate::geometry::grid::EvidenceGrid;
 use crate::reflect::BoundedPlane;
 use crate::sensor::OrganizedScan;
 
-/// Settings of the evidence grid.
+/// Settings of the evidence grid: `[map.evidence]` sets the cell, the
+/// margin and the votes a cell needs; the rest are the method's constants,
+/// [`EvidenceParams::METHOD`] (the evidence grid bounds the panes of
+/// `map.boundary = "panes"`; the paper's hulls use none of it).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(from = "EvidenceKeys", into = "EvidenceKeys")]
 pub struct EvidenceParams {
     /// Cell edge length, m.
     pub cell: f64,
@@ -143,35 +146,108 @@ pub struct EvidenceParams {
     pub refit_max_angle_deg: f64,
 }
 
-impl Default for EvidenceParams {
-    fn default() -> Self {
+/// The keys of `[map.evidence]`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EvidenceKeys {
+    /// Cell edge length, m.
+    cell: f64,
+    /// The grid covers the landmark's hull grown by this much, m.
+    margin: f64,
+    /// Votes (cell and neighbours) needed to decide a cell.
+    min_votes: u32,
+}
+
+impl From<EvidenceKeys> for EvidenceParams {
+    fn from(k: EvidenceKeys) -> Self {
         Self {
-            cell: 0.2,
-            margin: 1.5,
-            min_votes: 3,
-            surface_band: 0.1,
-            behind: 0.1,
-            pass_margin: 0.15,
-            opaque_intensity_ratio: 3.0,
-            peak_angle_deg: 5.0,
-            weak_single_echo_votes: false,
-            min_echo_fraction: 0.0,
-            echo_reach: 0.0,
-            echo_deficit_ratio: 0.0,
-            echo_deficit_min_expected: 30.0,
-            echo_deficit_reach: 0.6,
-            max_cells: 4_000_000,
-            fill_between_votes_only: false,
-            bare_pass_max_deg: 0.0,
-            min_bare_passes: 0,
-            echo_normal_max_deg: 0.0,
-            echo_owner_test: false,
-            crossing_radius: 0.0,
-            direct_only: false,
-            refit_plane: false,
-            refit_min_echoes: 200,
-            refit_max_angle_deg: 3.0,
+            cell: k.cell,
+            margin: k.margin,
+            min_votes: k.min_votes,
+            ..Self::METHOD
         }
+    }
+}
+
+impl From<EvidenceParams> for EvidenceKeys {
+    fn from(p: EvidenceParams) -> Self {
+        Self {
+            cell: p.cell,
+            margin: p.margin,
+            min_votes: p.min_votes,
+        }
+    }
+}
+
+impl EvidenceParams {
+    /// The evidence grid's method (the fields' docs say what each does):
+    /// a return within 0.1 m of the crossing is on the plane, 0.1 m beyond
+    /// it behind; passes vote within 0.15 m of the hull; a single echo 3
+    /// times brighter than the median glass echo is opaque, one within 5
+    /// deg of normal incidence casts no vote, a weak one no "glass" vote;
+    /// a transparent region returning fewer than 1 surface echo in 200
+    /// passes is an opening, and so are transparent cells more than 1 m
+    /// from any glass echo and edge cells echoing less than a tenth of the
+    /// rate of the echoing cells within 0.6 m (at least 30 echoes
+    /// predicted); at most 4 million cells; a cell without votes is decided
+    /// by its neighbours only inside a region; no bare-pass or echo-normal
+    /// test; an echo on two landmarks votes for the one its beam meets
+    /// nearer normal incidence; the plane is open 0.5 m either side of
+    /// where the sensor crossed it (a door leaf's width); only beams that
+    /// meet the plane before any other reflective landmark vote; each plane
+    /// is refitted to its glass echoes (at least 200, by at most 3 deg).
+    /// `cell` 0.2 m, `margin` 1.5 m and `min_votes` 3, as
+    /// `configs/default.toml` sets them.
+    pub const METHOD: Self = Self {
+        cell: 0.2,
+        margin: 1.5,
+        min_votes: 3,
+        surface_band: 0.1,
+        behind: 0.1,
+        pass_margin: 0.15,
+        opaque_intensity_ratio: 3.0,
+        peak_angle_deg: 5.0,
+        weak_single_echo_votes: false,
+        min_echo_fraction: 0.005,
+        echo_reach: 1.0,
+        echo_deficit_ratio: 0.1,
+        echo_deficit_min_expected: 30.0,
+        echo_deficit_reach: 0.6,
+        max_cells: 4_000_000,
+        fill_between_votes_only: true,
+        bare_pass_max_deg: 10.0,
+        min_bare_passes: 3,
+        echo_normal_max_deg: 0.0,
+        echo_owner_test: true,
+        crossing_radius: 0.5,
+        direct_only: true,
+        refit_plane: true,
+        refit_min_echoes: 200,
+        refit_max_angle_deg: 3.0,
+    };
+
+    /// The grid with every test beyond the votes off (no opening tests,
+    /// no echo ownership, no crossing, every beam votes, no refit): what
+    /// the evidence grid's unit tests start from.
+    pub const BARE: Self = Self {
+        min_echo_fraction: 0.0,
+        echo_reach: 0.0,
+        echo_deficit_ratio: 0.0,
+        fill_between_votes_only: false,
+        bare_pass_max_deg: 0.0,
+        min_bare_passes: 0,
+        echo_owner_test: false,
+        crossing_radius: 0.0,
+        direct_only: false,
+        refit_plane: false,
+        ..Self::METHOD
+    };
+}
+
+impl Default for EvidenceParams {
+    /// `[map.evidence]` of `configs/default.toml`.
+    fn default() -> Self {
+        crate::config::default_section("map.evidence")
     }
 }
 

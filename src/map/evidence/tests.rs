@@ -63,7 +63,7 @@ fn where_the_sensor_crossed_the_plane_it_is_open() {
         scan: &scan,
         pose: Isometry3::identity(),
     };
-    let params = EvidenceParams::default();
+    let params = EvidenceParams::BARE;
     let evidence = gather_evidence(&pane, &[f], &params).unwrap();
     pane.evidence = Some(std::sync::Arc::new(evidence));
     let state = |pane: &BoundedPlane, y: f64, z: f64| {
@@ -114,7 +114,7 @@ fn bare_passes_near_normal_incidence_are_an_opening() {
         scan: &scan,
         pose: Isometry3::identity(),
     };
-    let off = EvidenceParams::default();
+    let off = EvidenceParams::BARE;
     let on = EvidenceParams {
         bare_pass_max_deg: 10.0,
         min_bare_passes: 3,
@@ -156,7 +156,7 @@ fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
         scan: &scan,
         pose: Isometry3::identity(),
     };
-    let off = EvidenceParams::default();
+    let off = EvidenceParams::BARE;
     let on = EvidenceParams {
         echo_normal_max_deg: 45.0,
         ..off
@@ -224,7 +224,7 @@ fn a_plane_off_its_glass_echoes_is_refitted_onto_them() {
     };
     let on = EvidenceParams {
         refit_plane: true,
-        ..EvidenceParams::default()
+        ..EvidenceParams::BARE
     };
     let fit = refit(&on).expect("a refit");
     let pane = Plane::new(-Vector3::x(), 5.0).unwrap();
@@ -233,7 +233,7 @@ fn a_plane_off_its_glass_echoes_is_refitted_onto_them() {
         "{fit:?}"
     );
     assert!((fit.d - pane.d).abs() < 1e-3, "{fit:?}");
-    assert_eq!(refit(&EvidenceParams::default()), None);
+    assert_eq!(refit(&EvidenceParams::BARE), None);
     let strict = EvidenceParams {
         refit_max_angle_deg: 0.5,
         ..on

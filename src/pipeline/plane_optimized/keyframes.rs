@@ -87,7 +87,8 @@ impl<'a> FrameViews<'a> {
         let p = self.classifier.params();
         let poses = self.poses;
         let support = if p.sequence_support {
-            let frames = keyframes(poses, p.support_keyframe_move, p.support_keyframe_turn_deg);
+            // Every frame that moved (a stationary repeat adds nothing).
+            let frames = keyframes(poses, 0.0, 0.0);
             Some(self.sequence_support(&frames, &planes, timings)?)
         } else {
             None
@@ -111,7 +112,7 @@ impl<'a> FrameViews<'a> {
         let (planes, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
-        let planes: Vec<BoundedPlane> = match (&space, p.echo_split.enabled) {
+        let planes: Vec<BoundedPlane> = match (&space, p.echo_split.is_some()) {
             (Some(space), true) => self
                 .echo_splits(&space_frames, &planes, space, support.as_ref(), timings)?
                 .into_iter()
@@ -329,13 +330,15 @@ impl<'a> FrameViews<'a> {
             None => None,
         };
         let scale = declared.unwrap_or(self.sensor.intensity);
-        let exponent = p.echo_split.range_exponent.resolve(scale);
+        // Called with the split configured.
+        let split = p.echo_split.unwrap_or_default();
+        let exponent = split.range_exponent.resolve(scale);
         tracing::info!(
             range_exponent = exponent,
             scale = scale.name(),
             "echo strengths"
         );
-        let incidence = p.echo_split.incidence_correction;
+        let incidence = split.incidence_correction;
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
@@ -435,7 +438,7 @@ impl<'a> FrameViews<'a> {
             .into_iter()
             .enumerate()
             .map(|(j, t)| {
-                let estimate = glass_or_mirror(&t, &direct, &p.echo_split, &p.mirror, exponent);
+                let estimate = glass_or_mirror(&t, &direct, &split, &p.mirror, exponent);
                 tracing::debug!(
                     plane = j,
                     behind_median = t.all.quantile(0.5),
