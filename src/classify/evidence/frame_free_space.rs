@@ -16,7 +16,7 @@ pub struct FrameFreeSpace {
     /// it (the image falls between rings, the mirrored surface is thin).
     pub error: f64,
     /// A return this much farther than the image proves the place free, m
-    /// (range noise), plus [`MARGIN_RATIO`] of the image's range.
+    /// (range noise), plus a share `MARGIN_RATIO` (0.01) of the image's range.
     pub margin: f64,
 }
 

@@ -303,12 +303,10 @@ impl<'a> FrameViews<'a> {
         Ok(space)
     }
 
-    /// Each plane's split of echoes behind it into reflected and
-    /// transmitted ones ([`EchoSplit`]), and whether it is a mirror, from
+    /// Each plane's glass-or-mirror estimate ([`glass_or_mirror()`]) from
     /// the keyframes `frames`: the strengths of every point behind the
-    /// plane, oriented by the points whose mirror image lies in seen-free
-    /// space (they cannot be reflections; a plane with almost none is a
-    /// mirror).
+    /// plane and of the direct echoes, and the points behind it that the
+    /// space seen directly calls real.
     fn echo_splits(
         &self,
         frames: &[usize],
