@@ -95,42 +95,54 @@ pub fn decide_weighed(
             space: ctx.space,
             support: ctx.support,
         };
-        let mut posterior = weighing.weigh(&point);
-        if past_extent {
-            posterior.reflection = unseen_posterior(posterior.reflection, weighing, &point);
-        }
-        let p = posterior.reflection;
-        let threshold = weighing.threshold();
-        let (class, conf) = if p > threshold {
-            (Class::Reflection, p)
-        } else if 1.0 - p > threshold {
-            let real = if !past_extent
-                && through_glass(
-                    landmark,
-                    &position,
-                    crossing,
-                    params.seen_surface_echo_reach,
-                ) {
-                Class::Obstacle
-            } else {
-                Class::Normal
-            };
-            (real, 1.0 - p)
-        } else {
-            (Class::Unclassified, p.max(1.0 - p))
-        };
-        (classes[i], confidence[i]) = (class, conf as f32);
-        rules[i] = if past_extent && classes[i] == Class::Reflection {
-            Rule::PastSeenExtent
-        } else {
-            posterior.rule
-        };
+        (classes[i], confidence[i], rules[i]) = decide_point(&point, params, weighing);
     }
     Decisions {
         classes,
         rules,
         confidence,
     }
+}
+
+/// The class of one point behind a plane, its confidence and the rule to
+/// report: the class whose posterior passes the weighing's threshold
+/// (real is an Obstacle where the beam passed glass, Normal where it passed
+/// an opening or beyond the plane's seen extent), else unclassified.
+fn decide_point(
+    point: &BehindPoint<'_>,
+    params: &DecisionParams,
+    weighing: &Weighing,
+) -> (Class, f32, Rule) {
+    let mut posterior = weighing.weigh(point);
+    if point.past_extent {
+        posterior.reflection = unseen_posterior(posterior.reflection, weighing, point);
+    }
+    let p = posterior.reflection;
+    let threshold = weighing.threshold();
+    let (class, conf) = if p > threshold {
+        (Class::Reflection, p)
+    } else if 1.0 - p > threshold {
+        let through = through_glass(
+            point.landmark,
+            &point.position,
+            point.crossing,
+            params.seen_surface_echo_reach,
+        );
+        let real = if !point.past_extent && through {
+            Class::Obstacle
+        } else {
+            Class::Normal
+        };
+        (real, 1.0 - p)
+    } else {
+        (Class::Unclassified, p.max(1.0 - p))
+    };
+    let rule = if point.past_extent && class == Class::Reflection {
+        Rule::PastSeenExtent
+    } else {
+        posterior.rule
+    };
+    (class, conf as f32, rule)
 }
 
 /// The posterior of a point past a plane's seen extent: the weighing's
