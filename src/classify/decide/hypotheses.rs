@@ -46,26 +46,14 @@ pub(crate) fn two_hypotheses(
     let mirrored = plane.mirror(p);
     let clearance = clearance_ratio * range;
     let refuted = |end: &Point3<f64>| {
-        if space.occupancy_clear_of(end, clearance) == Occupancy::Free {
-            return true;
-        }
-        // Start where the leg is `margin` off the plane: a leg at a grazing
-        // angle runs along the frames and wall strips beside the pane.
-        let dir = end - x;
-        let len = dir.norm();
-        if !(len > 0.0) {
-            return false;
-        }
-        let off = plane.normal.dot(&dir).abs() / len;
-        let start_t = if off > 1e-9 { margin / off } else { len };
-        if start_t + margin >= len {
-            return false;
-        }
-        // A path towards an observed surface is not refuted by a voxel it
-        // clips on the way: voxels are coarser than chair legs and desk
-        // edges. A path into space nobody saw, through a seen surface, is.
-        let start = x + dir * (start_t / len);
-        space.blocked(&start, end, margin) && !support.is_some_and(|s| s.near(end, support_radius))
+        leg_refuted(
+            space,
+            support,
+            &plane.normal,
+            &x,
+            end,
+            (margin, clearance, support_radius),
+        )
     };
     // The second hypothesis matters only when the first is refuted, and
     // the other way round: test the cheaper order and stop early.
@@ -80,4 +68,41 @@ pub(crate) fn two_hypotheses(
     } else {
         Verdict::Open
     }
+}
+
+/// Whether the hypothesis "the echo came from `end`", reached by a leg that
+/// leaves the plane (normal `normal`) at `x`, is refuted by the space seen
+/// directly: `end` lies in seen-free space with no seen surface within
+/// `clearance`, or the leg runs through a seen surface from `margin` off
+/// the plane to `margin` before `end`, unless an observed surface lies
+/// within `support_radius` of `end`. `(margin, clearance, support_radius)`
+/// in metres.
+pub(crate) fn leg_refuted(
+    space: &SensorFrameSpace<'_>,
+    support: Option<&dyn SurfaceSupport>,
+    normal: &nalgebra::Vector3<f64>,
+    x: &Point3<f64>,
+    end: &Point3<f64>,
+    (margin, clearance, support_radius): (f64, f64, f64),
+) -> bool {
+    if space.occupancy_clear_of(end, clearance) == Occupancy::Free {
+        return true;
+    }
+    // Start where the leg is `margin` off the plane: a leg at a grazing
+    // angle runs along the frames and wall strips beside the pane.
+    let dir = end - x;
+    let len = dir.norm();
+    if !(len > 0.0) {
+        return false;
+    }
+    let off = normal.dot(&dir).abs() / len;
+    let start_t = if off > 1e-9 { margin / off } else { len };
+    if start_t + margin >= len {
+        return false;
+    }
+    // A path towards an observed surface is not refuted by a voxel it
+    // clips on the way: voxels are coarser than chair legs and desk
+    // edges. A path into space nobody saw, through a seen surface, is.
+    let start = x + dir * (start_t / len);
+    space.blocked(&start, end, margin) && !support.is_some_and(|s| s.near(end, support_radius))
 }

@@ -56,7 +56,7 @@ pub use self::beam_hits::{BeamHit, BeamHits};
 pub(crate) use self::beam_test::{beam_classes, beam_test, room_depths, Beam};
 pub(crate) use self::frame_evidence::returns_along;
 use self::frame_evidence::NormalPointIndex;
-pub(crate) use self::hypotheses::{two_hypotheses, Verdict};
+pub(crate) use self::hypotheses::{leg_refuted, two_hypotheses, Verdict};
 pub use self::mirror_support::SurfaceSupport;
 use self::mirror_support::{support_is_perpendicular, supports_itself};
 pub(crate) use self::pane_edge::near_pane_edge;

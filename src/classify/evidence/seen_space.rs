@@ -6,8 +6,9 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::{outcome_weight, BehindPoint, EvidenceTest};
+use crate::classify::decide::leg_refuted;
 use crate::classify::rule::Rule;
-use crate::classify::space::{Occupancy, SensorFrameSpace};
+use crate::classify::space::SensorFrameSpace;
 use crate::classify::SurfaceSupport;
 
 /// Both hypotheses against the space seen directly: where it was measured
@@ -54,27 +55,14 @@ impl SeenSpace {
         end: &Point3<f64>,
         range: f64,
     ) -> bool {
-        if space.occupancy_clear_of(end, CLEARANCE_RATIO * range) == Occupancy::Free {
-            return true;
-        }
-        // Start where the leg is `margin` off the plane: a leg at a grazing
-        // angle runs along the frames and wall strips beside the pane.
-        let dir = end - x;
-        let len = dir.norm();
-        if !(len > 0.0) {
-            return false;
-        }
-        let off = normal.dot(&dir).abs() / len;
-        let start_t = if off > 1e-9 { self.margin / off } else { len };
-        if start_t + self.margin >= len {
-            return false;
-        }
-        // A path towards an observed surface is not refuted by a voxel it
-        // clips on the way: voxels are coarser than chair legs and desk
-        // edges. A path into space nobody saw, through a seen surface, is.
-        let start = x + dir * (start_t / len);
-        space.blocked(&start, end, self.margin)
-            && !support.is_some_and(|s| s.near(end, SUPPORT_RADIUS))
+        leg_refuted(
+            space,
+            support,
+            normal,
+            x,
+            end,
+            (self.margin, CLEARANCE_RATIO * range, SUPPORT_RADIUS),
+        )
     }
 }
 
