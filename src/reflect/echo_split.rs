@@ -17,7 +17,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cloud::IntensityScale;
+use crate::cloud::{Frame, IntensityScale};
+use crate::sensor::OrganizedScan;
 
 /// Histogram range and resolution of `log10(I · r^k)`.
 const LOG_MIN: f64 = -1.0;
@@ -110,6 +111,16 @@ impl EchoSplitParams {
         reflection_is_weaker: true,
         orient_without_anchors: true,
     };
+
+    /// The `cos` of [`echo_strength`] for `frame`'s point `point` under
+    /// these settings: the cosine of the incidence at which its beam met
+    /// its surface (from its neighbours in `scan`) when strengths are
+    /// corrected for it, else 1 (also where the neighbours span no
+    /// surface). The strengths a split is fitted to are computed with it,
+    /// as [`EchoSplit::incidence_cos`] computes the ones it decides.
+    pub fn incidence_cos(&self, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
+        incidence_cos(self.incidence_correction, scan, frame, point)
+    }
 }
 
 impl Default for EchoSplitParams {
@@ -160,6 +171,20 @@ impl Default for EchoHistogram {
         Self {
             counts: vec![0; BINS],
         }
+    }
+}
+
+/// The `cos` of [`echo_strength`] for point `point` of `frame`: the cosine
+/// of the incidence at which its beam met its surface (from its neighbours
+/// in `scan`) when the strengths are corrected for it (`correct`), else 1;
+/// also 1 where the neighbours do not span a surface. One rule for every
+/// strength, so that the strengths a split is fitted to and the ones it
+/// decides are computed alike.
+fn incidence_cos(correct: bool, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
+    if correct {
+        scan.incidence_cos(frame, point).unwrap_or(1.0)
+    } else {
+        1.0
     }
 }
 
@@ -376,6 +401,16 @@ impl EchoSplit {
             return None;
         }
         Some((s < self.threshold) == self.weak_is_reflection)
+    }
+
+    /// The `cos` of [`reflected`](Self::reflected) for `frame`'s point
+    /// `point`: the cosine of the incidence at which its beam met its
+    /// surface (from its neighbours in `scan`) when this split's strengths
+    /// are corrected for it, else 1 (also where the neighbours span no
+    /// surface), as [`EchoSplitParams::incidence_cos`] computed the
+    /// strengths it was fitted to.
+    pub fn incidence_cos(&self, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
+        incidence_cos(self.incidence_correction, scan, frame, point)
     }
 }
 

@@ -470,11 +470,7 @@ pub fn decide_with_hits(
         // tells floors and ceilings behind glass (their own mirror images)
         // from their reflections.
         let strength = |split: &EchoSplit| {
-            let cos = if split.incidence_correction {
-                scan.incidence_cos(frame, i).unwrap_or(1.0)
-            } else {
-                1.0
-            };
+            let cos = split.incidence_cos(scan, frame, i);
             split.reflected(frame.points[i].intensity, p.coords.norm(), cos)
         };
         let verdict = if single_pane {

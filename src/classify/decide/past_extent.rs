@@ -58,11 +58,7 @@ pub(super) fn past_seen_extent(
     // A reflection off glass is weak: a return as strong as the landmark's
     // transmitted echoes (a direct return is stronger still) is real.
     if let Some(split) = &bp.echo_split {
-        let cos = if split.incidence_correction {
-            scan.incidence_cos(frame, i).unwrap_or(1.0)
-        } else {
-            1.0
-        };
+        let cos = split.incidence_cos(scan, frame, i);
         if split.reflected(frame.points[i].intensity, p.coords.norm(), cos) == Some(false) {
             return Some((Class::Normal, Rule::EchoStrength));
         }

@@ -46,14 +46,7 @@ impl EvidenceTest for EchoStrength {
 
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let split = point.landmark.echo_split.filter(|_| point.single_pane)?;
-        let cos = if split.incidence_correction {
-            point
-                .scan
-                .incidence_cos(point.frame, point.index)
-                .unwrap_or(1.0)
-        } else {
-            1.0
-        };
+        let cos = split.incidence_cos(point.scan, point.frame, point.index);
         let s = echo_strength(point.intensity(), point.range, split.range_exponent, cos);
         let weak = (split.weak_mean, split.weak_spread.max(MIN_SPREAD));
         let strong = (split.strong_mean, split.strong_spread.max(MIN_SPREAD));

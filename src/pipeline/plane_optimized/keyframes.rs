@@ -336,7 +336,6 @@ impl<'a> FrameViews<'a> {
             scale = scale.name(),
             "echo strengths"
         );
-        let incidence = split.incidence_correction;
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
@@ -363,11 +362,7 @@ impl<'a> FrameViews<'a> {
                     let Some(h) = hits.get(i, &pos, &sensor_planes) else {
                         // One column in four is plenty for the room's echoes.
                         if i % 4 == 0 {
-                            let cos = if incidence {
-                                inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
-                            } else {
-                                1.0
-                            };
+                            let cos = split.incidence_cos(inp.scan, inp.frame, i);
                             let r = pos.coords.norm();
                             seen_direct.add(echo_strength(pt.intensity, r, exponent, cos));
                         }
@@ -389,11 +384,7 @@ impl<'a> FrameViews<'a> {
                         h.range,
                         p.decision.pane_edge_margin,
                     );
-                    let cos = if incidence {
-                        inp.scan.incidence_cos(inp.frame, i).unwrap_or(1.0)
-                    } else {
-                        1.0
-                    };
+                    let cos = split.incidence_cos(inp.scan, inp.frame, i);
                     let strength = echo_strength(pt.intensity, range, exponent, cos);
                     let stats = &mut out[h.plane];
                     stats.all.add(strength);
