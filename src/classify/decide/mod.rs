@@ -38,6 +38,10 @@
 //!    - dual return: on a beam with two returns behind the plane whose far
 //!      return is an Obstacle, the near return is a Reflection (the strongest
 //!      echo came back off the glass; the last came through it).
+//!
+//!    Each is one function of `ladder.rs`, tried in this order until one
+//!    decides; a beam past a plane's seen extent has its own, shorter
+//!    ladder (`past_extent.rs`).
 //! 3. What no evidence decides is `ambiguous` (the paper: unclassified, so
 //!    it is removed from the filtered cloud).
 
@@ -47,6 +51,7 @@ mod beam_hits;
 mod beam_test;
 mod frame_evidence;
 mod hypotheses;
+mod ladder;
 mod mirror_support;
 mod pane_edge;
 mod past_extent;
@@ -56,20 +61,17 @@ pub use self::beam_hits::{BeamHit, BeamHits};
 pub(crate) use self::beam_test::{beam_classes, beam_test, room_depths, Beam};
 pub(crate) use self::frame_evidence::returns_along;
 use self::frame_evidence::NormalPointIndex;
-pub(crate) use self::hypotheses::{leg_refuted, two_hypotheses, Verdict};
+pub(crate) use self::hypotheses::leg_refuted;
+use self::ladder::{dual_return, Ladder};
 pub use self::mirror_support::SurfaceSupport;
-use self::mirror_support::{support_is_perpendicular, supports_itself};
 pub(crate) use self::pane_edge::near_pane_edge;
-use self::pane_edge::real_by_space;
 use self::past_extent::past_seen_extent;
 pub(crate) use self::past_extent::through_glass;
-use self::past_pane::past_second_pane;
-use super::boundary::{beam_crossing, BeamPlanes};
+use super::boundary::BeamPlanes;
 use super::rule::{Decisions, Rule};
-use super::space::{Occupancy, SensorFrameSpace};
+use super::space::SensorFrameSpace;
 use super::Class;
 use crate::cloud::Frame;
-use crate::reflect::echo_split::EchoSplit;
 use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -340,7 +342,8 @@ pub fn decide(
 /// [`decide`] with the beam test already done: `hits` from
 /// [`BeamHits::compute`] with reach `params.glass_distance` against
 /// `bounded`; `space` is the sequence's directly seen space from this
-/// frame's pose, for the two-hypothesis test.
+/// frame's pose, for the two-hypothesis test. The steps of the module
+/// documentation, in order; a point keeps the first decision it gets.
 #[allow(clippy::too_many_arguments)]
 pub fn decide_with_hits(
     frame: &Frame,
@@ -352,14 +355,11 @@ pub fn decide_with_hits(
     support: Option<&dyn SurfaceSupport>,
     space: Option<&SensorFrameSpace<'_>>,
 ) -> Decisions {
-    let n = frame.points.len();
     let beams = beam_test(frame, scan, bounded, hits, params);
     let (mut classes, mut rules) = beam_classes(&beams);
     if bounded.is_empty() {
         return hard_decisions(classes, rules);
     }
-
-    let max_indoor = room_depths(frame, bounded, &classes);
 
     let own_support = (params.support_test && params.support_radius > 0.0 && support.is_none())
         .then(|| NormalPointIndex::new(frame, &classes));
@@ -367,15 +367,22 @@ pub fn decide_with_hits(
         (Some(own), _) => Some(own),
         (None, s) => s,
     };
+    let ladder = Ladder {
+        frame,
+        scan,
+        sensor,
+        bounded,
+        one_sided: BeamPlanes::hulls(bounded, 0.0),
+        max_indoor: room_depths(frame, bounded, &classes),
+        params,
+        support,
+        space,
+    };
 
-    // The planes' boundaries, for beams that cross a second pane.
-    let one_sided = BeamPlanes::hulls(bounded, 0.0);
-
-    // 2. Evidence for behind-plane points: obstacle tests first.
-    let is_last = |i: usize| frame.points[i].ret == 2 || scan.second(scan.cell_of(i)).is_none();
-    for i in 0..n {
-        if let Beam::Unseen { plane } = beams[i] {
-            if let Some(decision) = past_seen_extent(
+    // 2. Evidence for behind-plane points, the first rule that decides.
+    for (i, beam) in beams.iter().enumerate() {
+        let decision = match *beam {
+            Beam::Unseen { plane } => past_seen_extent(
                 frame,
                 scan,
                 sensor,
@@ -384,164 +391,23 @@ pub fn decide_with_hits(
                 params,
                 support,
                 space,
-            ) {
-                (classes[i], rules[i]) = decision;
-            }
-            continue;
-        }
-        let Beam::Behind { plane } = beams[i] else {
-            continue;
+            ),
+            Beam::Behind { plane } => ladder.behind_plane(i, plane as usize),
+            _ => None,
         };
-        let bp = &bounded[plane as usize];
-        let p = frame.points[i].position();
-        // Past a second pane the first one's mirror says nothing: such beams
-        // are left to the frame's own tests.
-        let t = beam_crossing(&bp.plane, &p).unwrap_or(p.coords.norm());
-        let single_pane = !one_sided.second_pane(
-            &p,
-            plane as usize,
-            t,
-            params.glass_distance,
-            params.behind_distance,
-        );
-        // Behind a mirror nothing is real, unless the beam may have passed
-        // beside it.
-        if bp.is_mirror() && single_pane {
-            let seen_beside = near_pane_edge(bp, &p, t, params.pane_edge_margin)
-                .then(|| real_by_space(space, support, bp, &p, params))
-                .flatten();
-            (classes[i], rules[i]) = match seen_beside {
-                Some(rule) => (Class::Normal, rule),
-                None => (Class::Reflection, Rule::BehindMirror),
-            };
-            continue;
-        }
-        let mirrored = bp.plane.mirror(&p);
-        let along_beam = if params.free_space_test || params.support_test {
-            returns_along(
-                scan,
-                sensor,
-                frame,
-                &mirrored,
-                params.free_space_neighbourhood,
-            )
-        } else {
-            None
-        };
-        let mirrored_range = mirrored.coords.norm();
-        // The frame's own return where the mirror image lies confirms the
-        // mirror hypothesis: the space test has nothing to add.
-        let on_beam = along_beam
-            .is_some_and(|(closest, _)| (closest - mirrored_range).abs() <= params.support_range);
-        if let Some(space) = space.filter(|_| params.space_test && single_pane && !on_beam) {
-            match two_hypotheses(space, support, &bp.plane, &p, params) {
-                Verdict::Mirror => {
-                    (classes[i], rules[i]) = (Class::Reflection, Rule::RealRefuted);
-                    continue;
-                }
-                Verdict::Real => {
-                    (classes[i], rules[i]) = (Class::Obstacle, Rule::MirrorRefuted);
-                    continue;
-                }
-                Verdict::Open => {}
-            }
-        }
-        let depth = -bp.plane.signed_distance(&p);
-        let tests_apply = params.obstacle_tests_on_all_returns || is_last(i);
-        if tests_apply
-            && params.depth_test
-            && depth > max_indoor[plane as usize] + params.depth_margin
-        {
-            (classes[i], rules[i]) = (Class::Obstacle, Rule::Depth);
-            continue;
-        }
-        if tests_apply && params.free_space_test {
-            if let Some((_, far)) = along_beam {
-                let margin =
-                    params.free_space_margin + params.free_space_margin_ratio * mirrored_range;
-                if far > mirrored_range + margin {
-                    (classes[i], rules[i]) = (Class::Obstacle, Rule::FrameFreeSpace);
-                    continue;
-                }
-            }
-        }
-        // Echo strength, where the landmark's echoes fall in two groups:
-        // a reflection off glass is far weaker than a transmitted echo, which
-        // tells floors and ceilings behind glass (their own mirror images)
-        // from their reflections.
-        let strength = |split: &EchoSplit| {
-            let cos = split.incidence_cos(scan, frame, i);
-            split.reflected(frame.points[i].intensity, p.coords.norm(), cos)
-        };
-        let verdict = if single_pane {
-            bp.echo_split.and_then(|s| strength(&s))
-        } else if params.echo_strength_past_second_pane {
-            past_second_pane(bounded, &one_sided, plane as usize, &p, t, params, strength)
-        } else {
-            None
-        };
-        // Real where it was measured: through glass, or through an opening
-        // in the plane where the pane's extent overreaches its echoes.
-        let real = || {
-            if through_glass(bp, &p, t, params.seen_surface_echo_reach) {
-                Class::Obstacle
-            } else {
-                Class::Normal
-            }
-        };
-        if let Some(reflected) = verdict {
-            classes[i] = if reflected { Class::Reflection } else { real() };
-            rules[i] = Rule::EchoStrength;
-            continue;
-        }
-        // Where it was measured, a surface was seen directly from elsewhere:
-        // it is real (a mirror image lands near some observed surface far
-        // more often than exactly on one, so this outranks support).
-        if params.seen_surface_test
-            && single_pane
-            && space.is_some_and(|s| s.occupancy(&p) == Occupancy::Occupied)
-        {
-            (classes[i], rules[i]) = (real(), Rule::SeenSurface);
-            continue;
-        }
-        if params.support_test && !supports_itself(params, &p, &mirrored) {
-            let nearby = params.support_radius > 0.0
-                && support.is_some_and(|s| s.near(&mirrored, params.support_radius));
-            // The surface's shape is asked only of a supported image.
-            if (on_beam || nearby)
-                && !support_is_perpendicular(
-                    support,
-                    &bp.plane,
-                    &mirrored,
-                    params.support_radius,
-                    params.perpendicular_support_deg,
-                )
-            {
-                (classes[i], rules[i]) = (Class::Reflection, Rule::Support);
-            }
+        if let Some(decision) = decision {
+            (classes[i], rules[i]) = decision;
         }
     }
-
-    // Dual-return rule: the near return of a beam whose far return is an
-    // obstacle behind the same plane is a reflection.
     if params.dual_return_rule {
-        for (_, a, b) in scan.dual_cells() {
-            let (near, far) = if frame.points[a].range() <= frame.points[b].range() {
-                (a, b)
-            } else {
-                (b, a)
-            };
-            let same_plane = matches!((beams[near], beams[far]),
-                (Beam::Behind { plane: x }, Beam::Behind { plane: y }) if x == y);
-            if same_plane
-                && classes[far] == Class::Obstacle
-                && classes[near] != Class::Obstacle
-                && (frame.points[near].position() - frame.points[far].position()).norm()
-                    > params.dual_gap
-            {
-                (classes[near], rules[near]) = (Class::Reflection, Rule::DualReturn);
-            }
-        }
+        dual_return(
+            frame,
+            scan,
+            &beams,
+            &mut classes,
+            &mut rules,
+            params.dual_gap,
+        );
     }
 
     // 3. Undecided behind-plane points.
