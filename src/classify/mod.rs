@@ -12,6 +12,7 @@
 pub mod boundary;
 pub mod decide;
 pub mod evidence;
+pub mod landmark_echoes;
 pub mod mirror;
 pub mod plane_map;
 pub mod rule;
@@ -21,6 +22,7 @@ pub mod support;
 pub mod weighed;
 
 pub use decide::{BeamHit, BeamHits, DecisionParams, SurfaceSupport};
+pub use landmark_echoes::EchoCounting;
 pub use plane_map::{DecisionModel, PlaneMapClassifier, PlaneMapParams};
 pub use rule::{Decisions, Rule, RuleTally};
 pub use single_scan::SingleScanClassifier;

@@ -9,17 +9,14 @@ use std::time::Instant;
 use nalgebra::{Isometry3, Point3};
 
 use super::world_maps::rotation_translation;
-use crate::classify::boundary::BeamPlanes;
-use crate::classify::decide::{near_pane_edge, SurfaceSupport};
 use crate::classify::{
-    BeamHits, FrameInput, Occupancy, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
+    BeamHits, EchoCounting, FrameInput, PlaneMapClassifier, SpaceMap, SupportBuilder, WorldSupport,
 };
 use crate::cloud::Frame;
 use crate::map::{
     find_ghosts, glass_or_mirror, passed_through, BehindEchoes, Ghost, GhostParams, GlassOrMirror,
 };
 use crate::pipeline::{Sequence, StageTimings};
-use crate::reflect::echo_split::echo_strength;
 use crate::reflect::{BoundedPlane, Detection, EchoHistogram};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
@@ -306,7 +303,8 @@ impl<'a> FrameViews<'a> {
     /// Each plane's glass-or-mirror estimate ([`glass_or_mirror()`]) from
     /// the keyframes `frames`: the strengths of every point behind the
     /// plane and of the direct echoes, and the points behind it that the
-    /// space seen directly calls real.
+    /// space seen directly calls real, counted per frame by
+    /// [`EchoCounting`] and summed here.
     fn echo_splits(
         &self,
         frames: &[usize],
@@ -316,10 +314,6 @@ impl<'a> FrameViews<'a> {
         timings: &mut StageTimings,
     ) -> Result<Vec<GlassOrMirror>> {
         let p = self.classifier.params();
-        let behind = p.decision.behind_distance;
-        let glass = p.decision.glass_distance;
-        let seen_space = &p.weighing.seen_space;
-        let clearance = crate::classify::evidence::seen_space::CLEARANCE_RATIO;
         // The frames of a sequence share one intensity scale: the first
         // keyframe's, as its source says (a PLY comment, the simulator),
         // else the sensor model's.
@@ -339,83 +333,23 @@ impl<'a> FrameViews<'a> {
         // Per landmark: the strengths of all points behind it, and of its
         // anchors, summed over the keyframes (integer counts: the result
         // does not depend on the order or the threads).
-        let empty = || vec![BehindEchoes::default(); planes.len()];
-        let mut totals = empty();
+        let mut totals = vec![BehindEchoes::default(); planes.len()];
         // The strengths of the direct echoes (no pane on the beam), what a
         // mirror's images look like.
         let mut direct = EchoHistogram::default();
+        let counting = EchoCounting {
+            params: p,
+            split: &split,
+            range_exponent: exponent,
+            space,
+            support,
+        };
         self.pass(
             frames,
             planes,
             "echo split",
             timings,
-            |inp, hits| {
-                let mut out = empty();
-                let mut seen_direct = EchoHistogram::default();
-                let sensor_planes = PlaneMapClassifier::planes_in_sensor_frame(inp);
-                let view = space.in_sensor_frame(inp.pose);
-                let seen = support.map(|s| s.in_sensor_frame(inp.pose));
-                let seen = seen.as_ref().map(|s| s as &dyn SurfaceSupport);
-                let beams = BeamPlanes::hulls(&sensor_planes, p.hull_margin);
-                for (i, pt) in inp.frame.points.iter().enumerate() {
-                    let pos = pt.position();
-                    let Some(h) = hits.get(i, &pos, &sensor_planes) else {
-                        // One column in four is plenty for the room's echoes.
-                        if i % 4 == 0 {
-                            let cos = split.incidence_cos(inp.scan, inp.frame, i);
-                            let r = pos.coords.norm();
-                            seen_direct.add(echo_strength(pt.intensity, r, exponent, cos));
-                        }
-                        continue;
-                    };
-                    let range = pos.coords.norm();
-                    // Only beams behind one pane: past a second one the
-                    // mirror of the first says nothing.
-                    if range - h.range <= behind
-                        || beams.second_pane(&pos, h.plane, h.range, glass, behind)
-                    {
-                        continue;
-                    }
-                    // A beam near the extent's edge may have passed beside
-                    // the landmark: no evidence of what it does to light.
-                    let near_edge = near_pane_edge(
-                        &sensor_planes[h.plane],
-                        &pos,
-                        h.range,
-                        p.decision.pane_edge_margin,
-                    );
-                    let cos = split.incidence_cos(inp.scan, inp.frame, i);
-                    let strength = echo_strength(pt.intensity, range, exponent, cos);
-                    let stats = &mut out[h.plane];
-                    stats.all.add(strength);
-                    if !near_edge {
-                        stats.inside.add(strength);
-                    }
-                    let mirrored = sensor_planes[h.plane].plane.mirror(&pos);
-                    // A glass echo of a second pane behind this one is
-                    // transmitted by this one, but its strength is that
-                    // pane's echo, not a surface's: no anchor.
-                    let on_other_pane =
-                        beams.crosses_between(&pos, h.plane, range - glass, range + glass);
-                    if on_other_pane {
-                        continue;
-                    }
-                    let anchor =
-                        view.occupancy_clear_of(&mirrored, clearance * range) == Occupancy::Free;
-                    if anchor {
-                        stats.anchors.add(strength);
-                    }
-                    // Real where measured: its mirror image refuted by the
-                    // seen space, its measured position not.
-                    let plane = &sensor_planes[h.plane].plane;
-                    let x = Point3::from(pos.coords * (h.range / range));
-                    let transmitted = !near_edge
-                        && seen_space.refuted(&view, seen, &plane.normal, &x, &mirrored, range)
-                        && !seen_space.refuted(&view, seen, &plane.normal, &x, &pos, range);
-                    stats.transmitted_inside += u64::from(transmitted);
-                }
-                (out, seen_direct)
-            },
+            |inp, hits| counting.count_frame(inp, hits),
             |(frame_counts, frame_direct)| {
                 for (total, frame) in totals.iter_mut().zip(&frame_counts) {
                     total.merge(frame);
