@@ -4,11 +4,12 @@
 # its firings counted against the truth by the rule tallies of `specular
 # detect --rules`; then scripts/calibrate-evidence.py prints the rates.
 #   scripts/calibrate-evidence.sh [OUT]   (default /tmp/calibrate-evidence)
+#   TESTS="depth echo-order" scripts/calibrate-evidence.sh   (only those tests)
 set -euo pipefail
 OUT=${1:-/tmp/calibrate-evidence}
 BIN=${BIN:-target/release/specular}
 mkdir -p "$OUT"
-for t in seen-space seen-surface image-support frame-free-space depth echo-strength echo-order; do
+for t in ${TESTS:-seen-space seen-surface image-support frame-free-space depth echo-strength echo-order level-surface}; do
   printf '[plane_map.weighing]\ntests = ["%s"]\n' "$t" > "$OUT/$t.toml"
   for f in $("$BIN" simulate --list-families); do
     for s in 0 1; do

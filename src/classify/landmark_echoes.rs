@@ -154,5 +154,14 @@ impl EchoCounting<'_> {
         };
         let transmitted = !near_edge && refuted(&mirrored) && !refuted(&pos);
         stats.transmitted_inside += u64::from(transmitted);
+        if transmitted {
+            let tolerance = self.params.weighing.level_surface.tolerance;
+            if let Some(k) = view.space.level_of(&pos, tolerance) {
+                if stats.transmitted_at_level.len() <= k {
+                    stats.transmitted_at_level.resize(k + 1, 0);
+                }
+                stats.transmitted_at_level[k] += 1;
+            }
+        }
     }
 }

@@ -13,6 +13,7 @@ pub mod boundary;
 pub mod decide;
 pub mod evidence;
 pub mod landmark_echoes;
+pub mod levels;
 pub mod mirror;
 pub mod plane_map;
 pub mod rule;

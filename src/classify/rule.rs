@@ -64,10 +64,13 @@ pub enum Rule {
     /// Weighed: no test weighed towards the class given; the landmark's
     /// glass-or-mirror prior decided.
     Prior = 18,
+    /// Weighed: the point lies at the height of a floor or ceiling seen
+    /// directly, which runs on behind the glass.
+    LevelSurface = 19,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 19] = [
+pub const RULES: [Rule; 20] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -87,6 +90,7 @@ pub const RULES: [Rule; 19] = [
     Rule::PastSeenExtent,
     Rule::Weighed,
     Rule::Prior,
+    Rule::LevelSurface,
 ];
 
 impl Rule {
@@ -117,6 +121,7 @@ impl Rule {
             Rule::PastSeenExtent => "past-seen-extent",
             Rule::Weighed => "weighed",
             Rule::Prior => "prior",
+            Rule::LevelSurface => "level-surface",
         }
     }
 }

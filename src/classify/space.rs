@@ -23,6 +23,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
+use super::levels::Levels;
 use crate::geometry::fastmath::floor_i64;
 use crate::geometry::voxel::FxHashMap;
 
@@ -75,6 +76,8 @@ pub struct SpaceMap {
     // not bricks.
     #[allow(clippy::vec_box)]
     bricks: Vec<Box<Brick>>,
+    /// The heights of the surfaces hit, for the floors and ceilings.
+    levels: Levels,
 }
 
 impl std::fmt::Debug for SpaceMap {
@@ -115,6 +118,7 @@ impl SpaceMap {
             block_hits: block_hits.max(1),
             index: FxHashMap::default(),
             bricks: Vec::new(),
+            levels: Levels::default(),
         }
     }
 
@@ -188,6 +192,7 @@ impl SpaceMap {
             });
         }
         if hit {
+            self.levels.add(end.z);
             let (key, local) = split(self.voxel_of(end));
             let block_hits = self.block_hits;
             let b = self.brick_index(key) as usize;
@@ -297,6 +302,11 @@ impl SpaceMap {
         hit
     }
 
+    /// The floors and ceilings seen directly (world z).
+    pub fn levels(&self) -> &Levels {
+        &self.levels
+    }
+
     /// A view answering in the sensor frame of a frame with pose `pose`.
     pub fn in_sensor_frame(&self, pose: Isometry3<f64>) -> SensorFrameSpace<'_> {
         SensorFrameSpace {
@@ -392,6 +402,17 @@ impl SensorFrameSpace<'_> {
     /// [`SpaceMap::occupancy_clear_of`] of a sensor-frame point.
     pub fn occupancy_clear_of(&self, p: &Point3<f64>, clearance: f64) -> Occupancy {
         self.map.occupancy_clear_of(&self.world(p), clearance)
+    }
+
+    /// The index of the floor or ceiling seen directly ([`Levels`]) within
+    /// `tolerance` of a sensor-frame point's height, if any.
+    pub fn level_of(&self, p: &Point3<f64>, tolerance: f64) -> Option<usize> {
+        self.map.levels.index_near(self.world(p).z, tolerance)
+    }
+
+    /// The world height of a sensor-frame point, m.
+    pub fn height(&self, p: &Point3<f64>) -> f64 {
+        self.world(p).z
     }
 
     /// [`SpaceMap::blocked`] for a sensor-frame segment.

@@ -191,6 +191,7 @@ fn section_defaults_are_the_default_file() {
         "plane_map.weighing.depth",
         "plane_map.weighing.echo_strength",
         "plane_map.weighing.echo_order",
+        "plane_map.weighing.level_surface",
     ]);
     fn tables(t: &toml::Table, prefix: &str, out: &mut Vec<String>) {
         for (k, v) in t {

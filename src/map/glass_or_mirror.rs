@@ -65,6 +65,9 @@ pub struct BehindEchoes {
     pub inside: EchoHistogram,
     /// Points of `inside` that the seen space calls real where measured.
     pub transmitted_inside: u64,
+    /// Of those, how many ended at each level (floor or ceiling) seen
+    /// directly, by the level's index.
+    pub transmitted_at_level: Vec<u64>,
 }
 
 impl BehindEchoes {
@@ -74,8 +77,44 @@ impl BehindEchoes {
         self.anchors.merge(&other.anchors);
         self.inside.merge(&other.inside);
         self.transmitted_inside += other.transmitted_inside;
+        if self.transmitted_at_level.len() < other.transmitted_at_level.len() {
+            self.transmitted_at_level
+                .resize(other.transmitted_at_level.len(), 0);
+        }
+        for (a, b) in self
+            .transmitted_at_level
+            .iter_mut()
+            .zip(&other.transmitted_at_level)
+        {
+            *a += b;
+        }
+    }
+
+    /// The heights among `levels` that run on behind the landmark: at
+    /// least [`MIN_LEVEL_TRANSMISSIONS`] confirmed transmissions, and
+    /// [`LEVEL_TRANSMISSION_SHARE`] of them, ended at each.
+    pub fn levels_behind(&self, levels: &[f64]) -> Vec<f64> {
+        levels
+            .iter()
+            .zip(&self.transmitted_at_level)
+            .filter(|(_, &n)| {
+                n >= MIN_LEVEL_TRANSMISSIONS
+                    && n as f64 >= LEVEL_TRANSMISSION_SHARE * self.transmitted_inside as f64
+            })
+            .map(|(&h, _)| h)
+            .collect()
     }
 }
+
+/// A floor or ceiling runs on behind a landmark when at least this many
+/// confirmed transmissions over the keyframes ended at its height: a few
+/// stray ones (a pose error at the pane's foot) do not make a floor.
+pub const MIN_LEVEL_TRANSMISSIONS: u64 = 20;
+
+/// ... and at least this share of all its confirmed transmissions: a floor
+/// seen through the glass takes a large share of them, a facade beyond it
+/// that crosses the level's height a thin band.
+pub const LEVEL_TRANSMISSION_SHARE: f64 = 0.1;
 
 /// What the sequence says about one landmark.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -292,5 +331,29 @@ mod tests {
         };
         let t = glass_or_mirror(&seen_through, &direct, &split, &p, 2.0);
         assert!(t.mirror_probability < 0.1, "{t:?}");
+    }
+
+    /// A level runs on behind a landmark when enough of its confirmed
+    /// transmissions, and a large enough share of them, ended there; counts
+    /// merged over frames add up level by level.
+    #[test]
+    fn a_level_runs_on_behind_where_transmissions_end_at_it() {
+        let mut a = BehindEchoes {
+            transmitted_inside: 100,
+            transmitted_at_level: vec![30],
+            ..BehindEchoes::default()
+        };
+        let b = BehindEchoes {
+            transmitted_inside: 100,
+            transmitted_at_level: vec![0, 5],
+            ..BehindEchoes::default()
+        };
+        a.merge(&b);
+        assert_eq!(a.transmitted_inside, 200);
+        assert_eq!(a.transmitted_at_level, vec![30, 5]);
+        // 30 of 200 (15 %) at the floor, 5 at the ceiling (too few).
+        assert_eq!(a.levels_behind(&[0.0, 3.0]), vec![0.0]);
+        a.transmitted_inside = 1000; // 3 %: a band of a facade.
+        assert!(a.levels_behind(&[0.0, 3.0]).is_empty());
     }
 }

@@ -47,6 +47,10 @@ pub struct BoundedPlane {
     /// real) rather than glass, from all of its evidence over the sequence
     /// ([`glass_or_mirror`](mod@crate::map::glass_or_mirror)), when estimated.
     pub mirror_probability: Option<f64>,
+    /// The heights (world z, m) of the floors and ceilings seen directly
+    /// that run on behind the plane: transmissions confirmed by the space
+    /// seen directly end at them ([`crate::classify::levels`]).
+    pub levels_behind: Vec<f64>,
 }
 
 impl BoundedPlane {
@@ -67,6 +71,7 @@ impl BoundedPlane {
             panes: None,
             echo_split: None,
             mirror_probability: None,
+            levels_behind: Vec::new(),
         }
     }
 
@@ -183,6 +188,7 @@ impl BoundedPlane {
             panes: self.panes.clone(),
             echo_split: self.echo_split,
             mirror_probability: self.mirror_probability,
+            levels_behind: self.levels_behind.clone(),
         }
     }
 

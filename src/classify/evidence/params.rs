@@ -2,7 +2,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, SeenSpace, SeenSurface};
+use super::{
+    Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, LevelSurface, SeenSpace,
+    SeenSurface,
+};
 
 /// Parameters of the evidence weighing behind reflective landmarks
 /// (`[plane_map.weighing]`).
@@ -11,7 +14,7 @@ use super::{Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, SeenSp
 pub struct WeighingParams {
     /// The tests weighed, by name: `seen-space`, `seen-surface`,
     /// `image-support`, `frame-free-space`, `depth`, `echo-strength`,
-    /// `echo-order`.
+    /// `echo-order`, `level-surface`.
     pub tests: Vec<String>,
     /// The posterior a class needs to be given; a point whose posterior
     /// falls short either way stays unclassified (probability, 0.5-1).
@@ -33,10 +36,12 @@ pub struct WeighingParams {
     pub echo_strength: EchoStrength,
     /// The echo-order test's parameters.
     pub echo_order: EchoOrder,
+    /// The level-surface test's parameters.
+    pub level_surface: LevelSurface,
 }
 
 /// Every built-in test's name, in the order they are weighed.
-pub const TEST_NAMES: [&str; 7] = [
+pub const TEST_NAMES: [&str; 8] = [
     "seen-space",
     "seen-surface",
     "image-support",
@@ -44,6 +49,7 @@ pub const TEST_NAMES: [&str; 7] = [
     "depth",
     "echo-strength",
     "echo-order",
+    "level-surface",
 ];
 
 /// The values of `configs/default.toml`.

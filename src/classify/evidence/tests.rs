@@ -158,3 +158,26 @@ fn depth_and_outcome_weight() {
     assert_eq!(d.classes, [Class::Obstacle]);
     let _ = Point3::<f64>::origin();
 }
+
+/// A point behind glass at the height of a floor that runs on behind the
+/// landmark is real (an Obstacle); without that floor the test says
+/// nothing, and behind a mirror it weighs nothing.
+#[test]
+fn a_floor_running_on_behind_glass_makes_its_points_real() {
+    let point = [[5.5f32, 0.2, 0.3]];
+    let mut planes = pane();
+    let weighing = only(&["level-surface"]);
+    let d = weighed(&point, &planes, &weighing);
+    assert_eq!(d.classes, [Class::Unclassified]);
+    planes[0].levels_behind = vec![0.32];
+    let d = weighed(&point, &planes, &weighing);
+    assert_eq!(d.classes, [Class::Obstacle]);
+    assert_eq!(d.rules, [Rule::LevelSurface]);
+    planes[0].levels_behind = vec![0.6];
+    let d = weighed(&point, &planes, &weighing);
+    assert_eq!(d.classes, [Class::Unclassified]);
+    planes[0].levels_behind = vec![0.32];
+    planes[0].mirror_probability = Some(1.0);
+    let d = weighed(&point, &planes, &weighing);
+    assert_eq!(d.classes, [Class::Reflection]);
+}

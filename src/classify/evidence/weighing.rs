@@ -48,6 +48,7 @@ impl Weighing {
                 "depth" => Box::new(params.depth),
                 "echo-strength" => Box::new(params.echo_strength),
                 "echo-order" => Box::new(params.echo_order),
+                "level-surface" => Box::new(params.level_surface),
                 other => {
                     return Err(Error::Config(format!(
                         "plane_map.weighing.tests: unknown evidence test {other:?} (known: {})",

@@ -96,6 +96,7 @@ impl<'a> FrameViews<'a> {
             tracing::info!(
                 keyframes = space_frames.len(),
                 bricks = space.bricks(),
+                levels = ?space.levels().heights(),
                 "space seen directly"
             );
             Some(space)
@@ -114,7 +115,7 @@ impl<'a> FrameViews<'a> {
                 .echo_splits(&space_frames, &planes, space, support.as_ref(), timings)?
                 .into_iter()
                 .zip(&planes)
-                .map(|(estimate, bp)| BoundedPlane {
+                .map(|((estimate, levels_behind), bp)| BoundedPlane {
                     echo_split: estimate.echo_split,
                     // Nobody walks through a mirror.
                     mirror_probability: Some(if crossings_open && passed_through(bp, &path) {
@@ -122,6 +123,7 @@ impl<'a> FrameViews<'a> {
                     } else {
                         estimate.mirror_probability
                     }),
+                    levels_behind,
                     ..bp.clone()
                 })
                 .collect(),
@@ -312,7 +314,7 @@ impl<'a> FrameViews<'a> {
         space: &SpaceMap,
         support: Option<&WorldSupport>,
         timings: &mut StageTimings,
-    ) -> Result<Vec<GlassOrMirror>> {
+    ) -> Result<Vec<(GlassOrMirror, Vec<f64>)>> {
         let p = self.classifier.params();
         // The frames of a sequence share one intensity scale: the first
         // keyframe's, as its source says (a PLY comment, the simulator),
@@ -371,9 +373,10 @@ impl<'a> FrameViews<'a> {
                     inside = t.inside.total(),
                     transmitted_inside = t.transmitted_inside,
                     ?estimate,
+                    transmitted_at_level = ?t.transmitted_at_level,
                     "glass or mirror"
                 );
-                estimate
+                (estimate, t.levels_behind(space.levels().heights()))
             })
             .collect())
     }
