@@ -107,7 +107,8 @@ pub fn decide_weighed(
 /// The class of one point behind a plane, its confidence and the rule to
 /// report: the class whose posterior passes the weighing's threshold
 /// (real is an Obstacle where the beam passed glass, Normal where it passed
-/// an opening or beyond the plane's seen extent), else unclassified.
+/// an opening, beside a mirror or beyond the plane's seen extent), else
+/// unclassified.
 fn decide_point(
     point: &BehindPoint<'_>,
     params: &DecisionParams,
@@ -128,7 +129,9 @@ fn decide_point(
             point.crossing,
             params.seen_surface_echo_reach,
         );
-        let real = if !point.past_extent && through {
+        // Nothing is seen through a mirror: a real point behind one was
+        // reached beside it.
+        let real = if !point.past_extent && through && !point.landmark.is_mirror() {
             Class::Obstacle
         } else {
             Class::Normal
