@@ -36,6 +36,19 @@ fn paths(table: &toml::Table) -> Vec<String> {
     out
 }
 
+/// Issue 38: a configuration a reader can hold in mind, every key with a
+/// meaning; a new key has to displace one.
+#[test]
+fn the_default_file_has_at_most_120_keys() {
+    let file: toml::Table = toml::from_str(include_str!("../../configs/default.toml")).unwrap();
+    let keys = paths(&file);
+    assert!(
+        keys.len() <= 120,
+        "{} keys in configs/default.toml",
+        keys.len()
+    );
+}
+
 #[test]
 fn default_is_the_default_file() {
     let parsed: Config = toml::from_str(include_str!("../../configs/default.toml"))
