@@ -40,9 +40,8 @@ impl Levels {
     }
 
     /// The heights of the level surfaces, m, ascending: each a local
-    /// maximum of the echoes within one bin, holding at least
-    /// [`LEVEL_SHARE`] of them, the strongest kept where two lie closer
-    /// than [`SEPARATION`].
+    /// maximum of the echoes within one bin, holding at least 5 % of them,
+    /// the strongest kept where two lie closer than 0.3 m.
     pub fn heights(&self) -> &[f64] {
         self.found.get_or_init(|| self.find())
     }
