@@ -157,10 +157,7 @@ impl EchoCounting<'_> {
         if transmitted {
             let tolerance = self.params.weighing.level_surface.tolerance;
             if let Some(k) = view.space.level_of(&pos, tolerance) {
-                if stats.transmitted_at_level.len() <= k {
-                    stats.transmitted_at_level.resize(k + 1, 0);
-                }
-                stats.transmitted_at_level[k] += 1;
+                *stats.at_level(k) += 1;
             }
         }
     }

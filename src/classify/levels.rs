@@ -35,7 +35,7 @@ impl Levels {
         if z.is_finite() {
             *self.bins.entry(floor_i64(z / BIN)).or_insert(0) += 1;
             self.total += 1;
-            self.found = OnceLock::new();
+            self.found.take();
         }
     }
 
@@ -46,17 +46,10 @@ impl Levels {
         self.found.get_or_init(|| self.find())
     }
 
-    /// Whether world height `z` lies within `tolerance` of a level.
-    pub fn near(&self, z: f64, tolerance: f64) -> bool {
-        self.index_near(z, tolerance).is_some()
-    }
-
     /// The index (in [`Levels::heights`]) of the level within `tolerance`
     /// of world height `z`, if any.
     pub fn index_near(&self, z: f64, tolerance: f64) -> Option<usize> {
-        self.heights()
-            .iter()
-            .position(|h| (z - h).abs() <= tolerance)
+        index_near(self.heights(), z, tolerance)
     }
 
     fn find(&self) -> Vec<f64> {
@@ -87,6 +80,11 @@ impl Levels {
     }
 }
 
+/// The index of the first of `heights` within `tolerance` of `z`, if any.
+pub fn index_near(heights: &[f64], z: f64, tolerance: f64) -> Option<usize> {
+    heights.iter().position(|h| (z - h).abs() <= tolerance)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -106,7 +104,8 @@ mod tests {
         let h = levels.heights().to_vec();
         assert_eq!(h.len(), 2, "{h:?}");
         assert!(h[0].abs() < 0.05 && (h[1] - 3.0).abs() < 0.05, "{h:?}");
-        assert!(levels.near(0.08, 0.1) && !levels.near(1.5, 0.1));
+        assert_eq!(levels.index_near(0.08, 0.1), Some(0));
+        assert_eq!(levels.index_near(1.5, 0.1), None);
     }
 
     #[test]

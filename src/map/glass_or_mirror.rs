@@ -77,17 +77,18 @@ impl BehindEchoes {
         self.anchors.merge(&other.anchors);
         self.inside.merge(&other.inside);
         self.transmitted_inside += other.transmitted_inside;
-        if self.transmitted_at_level.len() < other.transmitted_at_level.len() {
-            self.transmitted_at_level
-                .resize(other.transmitted_at_level.len(), 0);
+        for (k, &n) in other.transmitted_at_level.iter().enumerate() {
+            *self.at_level(k) += n;
         }
-        for (a, b) in self
-            .transmitted_at_level
-            .iter_mut()
-            .zip(&other.transmitted_at_level)
-        {
-            *a += b;
+    }
+
+    /// The count of confirmed transmissions that ended at level `k`, the
+    /// list grown to hold it.
+    pub fn at_level(&mut self, k: usize) -> &mut u64 {
+        if self.transmitted_at_level.len() <= k {
+            self.transmitted_at_level.resize(k + 1, 0);
         }
+        &mut self.transmitted_at_level[k]
     }
 
     /// The heights among `levels` that run on behind the landmark: at

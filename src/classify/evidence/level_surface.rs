@@ -5,6 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{outcome_weight, BehindPoint, EvidenceTest};
+use crate::classify::levels::index_near;
 use crate::classify::rule::Rule;
 
 /// A point behind glass at the height of a floor or ceiling seen directly
@@ -46,14 +47,7 @@ impl EvidenceTest for LevelSurface {
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let space = point.space?;
         let z = space.height(&point.position);
-        if !point
-            .landmark
-            .levels_behind
-            .iter()
-            .any(|h| (z - h).abs() <= self.tolerance)
-        {
-            return None;
-        }
+        index_near(&point.landmark.levels_behind, z, self.tolerance)?;
         let glass = 1.0 - point.landmark.mirror_probability.unwrap_or(0.0);
         Some(-glass * outcome_weight(self.error))
     }
