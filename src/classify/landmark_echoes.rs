@@ -153,8 +153,8 @@ impl EchoCounting<'_> {
             seen_space.refuted(view.space, view.seen, &plane.normal, &x, end, range)
         };
         let transmitted = !near_edge && refuted(&mirrored) && !refuted(&pos);
-        stats.transmitted_inside += u64::from(transmitted);
         if transmitted {
+            stats.transmitted.add(strength);
             let tolerance = self.params.weighing.level_surface.tolerance;
             if let Some(k) = view.space.level_of(&pos, tolerance) {
                 *stats.at_level(k) += 1;

@@ -62,6 +62,10 @@ pub struct PlaneRecord {
     /// glass, from its echoes over the sequence, when estimated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mirror_probability: Option<f64>,
+    /// The share of reflections among the echoes behind a reflective
+    /// landmark, where their strengths tell it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflection_share: Option<f64>,
 }
 
 /// Write `planes.json` (atomically, pretty-printed).

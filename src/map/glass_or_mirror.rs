@@ -21,6 +21,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::reflection_share::StrengthMixture;
 use crate::reflect::{EchoHistogram, EchoSplit, EchoSplitParams};
 
 /// Parameters of the glass-or-mirror estimate (`[plane_map.mirror]`).
@@ -63,8 +64,9 @@ pub struct BehindEchoes {
     pub anchors: EchoHistogram,
     /// ... of those whose beam crossed it well inside its extent.
     pub inside: EchoHistogram,
-    /// Points of `inside` that the seen space calls real where measured.
-    pub transmitted_inside: u64,
+    /// ... of those of `inside` that the seen space calls real where
+    /// measured (confirmed transmissions).
+    pub transmitted: EchoHistogram,
     /// Of those, how many ended at each level (floor or ceiling) seen
     /// directly, by the level's index.
     pub transmitted_at_level: Vec<u64>,
@@ -76,7 +78,7 @@ impl BehindEchoes {
         self.all.merge(&other.all);
         self.anchors.merge(&other.anchors);
         self.inside.merge(&other.inside);
-        self.transmitted_inside += other.transmitted_inside;
+        self.transmitted.merge(&other.transmitted);
         for (k, &n) in other.transmitted_at_level.iter().enumerate() {
             *self.at_level(k) += n;
         }
@@ -100,7 +102,7 @@ impl BehindEchoes {
             .zip(&self.transmitted_at_level)
             .filter(|(_, &n)| {
                 n >= MIN_LEVEL_TRANSMISSIONS
-                    && n as f64 >= LEVEL_TRANSMISSION_SHARE * self.transmitted_inside as f64
+                    && n as f64 >= LEVEL_TRANSMISSION_SHARE * self.transmitted.total() as f64
             })
             .map(|(&h, _)| h)
             .collect()
@@ -130,6 +132,9 @@ pub struct GlassOrMirror {
     pub transmission_llr: f64,
     /// ... of the weak echoes.
     pub weak_echo_llr: f64,
+    /// The share of reflections among its echoes, where their strengths
+    /// tell it ([`StrengthMixture`]).
+    pub reflection_share: Option<f64>,
 }
 
 /// The estimate for a landmark with echoes `behind`, given the strengths of
@@ -146,7 +151,7 @@ pub fn glass_or_mirror(
         .or_else(|| physical_split(direct, split, p, range_exponent));
     let n = behind.inside.total();
     let transmission_llr = binomial_llr(
-        behind.transmitted_inside as f64,
+        behind.transmitted.total() as f64,
         n as f64,
         p.false_transmission_rate,
         p.effective_views,
@@ -167,6 +172,7 @@ pub fn glass_or_mirror(
         mirror_probability: 1.0 / (1.0 + (-log_odds).exp()),
         transmission_llr,
         weak_echo_llr,
+        reflection_share: StrengthMixture::fit(behind).map(|m| m.share),
     }
 }
 
@@ -327,11 +333,16 @@ mod tests {
         let g = glass_or_mirror(&glass, &direct, &split, &p, 2.0);
         assert!(g.mirror_probability < 0.1, "{g:?}");
         let seen_through = BehindEchoes {
-            transmitted_inside: 400,
+            transmitted: transmissions(400),
             ..mirror
         };
         let t = glass_or_mirror(&seen_through, &direct, &split, &p, 2.0);
         assert!(t.mirror_probability < 0.1, "{t:?}");
+    }
+
+    /// `n` confirmed transmissions, all of one strength.
+    fn transmissions(n: usize) -> EchoHistogram {
+        histogram(std::iter::repeat(3.0).take(n))
     }
 
     /// A level runs on behind a landmark when enough of its confirmed
@@ -340,21 +351,21 @@ mod tests {
     #[test]
     fn a_level_runs_on_behind_where_transmissions_end_at_it() {
         let mut a = BehindEchoes {
-            transmitted_inside: 100,
+            transmitted: transmissions(100),
             transmitted_at_level: vec![30],
             ..BehindEchoes::default()
         };
         let b = BehindEchoes {
-            transmitted_inside: 100,
+            transmitted: transmissions(100),
             transmitted_at_level: vec![0, 5],
             ..BehindEchoes::default()
         };
         a.merge(&b);
-        assert_eq!(a.transmitted_inside, 200);
+        assert_eq!(a.transmitted.total(), 200);
         assert_eq!(a.transmitted_at_level, vec![30, 5]);
         // 30 of 200 (15 %) at the floor, 5 at the ceiling (too few).
         assert_eq!(a.levels_behind(&[0.0, 3.0]), vec![0.0]);
-        a.transmitted_inside = 1000; // 3 %: a band of a facade.
+        a.transmitted = transmissions(1000); // 3 %: a band of a facade.
         assert!(a.levels_behind(&[0.0, 3.0]).is_empty());
     }
 }

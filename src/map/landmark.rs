@@ -146,6 +146,7 @@ impl Landmark {
                 .map(|ps| ps.iter().map(to_3d).collect())
                 .unwrap_or_default(),
             mirror_probability: b.mirror_probability,
+            reflection_share: b.reflection_share,
         }
     }
 }

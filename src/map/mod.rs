@@ -14,6 +14,7 @@ pub mod landmark;
 pub mod merge;
 pub mod panes;
 pub mod params;
+pub mod reflection_share;
 
 pub use evidence::{
     gather_evidence, open_where_crossed, passed_through, path_crossings, EvidenceFrame,

@@ -200,6 +200,14 @@ pub fn echo_strength(intensity: f32, range: f64, range_exponent: f64, cos: f64) 
 }
 
 impl EchoHistogram {
+    /// Each bin's centre strength (decades) and count, weakest first.
+    pub fn bins(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.counts
+            .iter()
+            .enumerate()
+            .map(|(b, &c)| (centre(b), c as f64))
+    }
+
     /// Count one echo strength.
     pub fn add(&mut self, strength: f64) {
         if strength.is_finite() {

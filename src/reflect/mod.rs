@@ -51,6 +51,11 @@ pub struct BoundedPlane {
     /// that run on behind the plane: transmissions confirmed by the space
     /// seen directly end at them ([`crate::classify::levels`]).
     pub levels_behind: Vec<f64>,
+    /// The share of reflections among the echoes behind the plane, where
+    /// their strengths tell it
+    /// ([`reflection_share`](mod@crate::map::reflection_share)): the prior
+    /// of every point behind it.
+    pub reflection_share: Option<f64>,
 }
 
 impl BoundedPlane {
@@ -72,6 +77,7 @@ impl BoundedPlane {
             echo_split: None,
             mirror_probability: None,
             levels_behind: Vec::new(),
+            reflection_share: None,
         }
     }
 
@@ -189,6 +195,7 @@ impl BoundedPlane {
             echo_split: self.echo_split,
             mirror_probability: self.mirror_probability,
             levels_behind: self.levels_behind.clone(),
+            reflection_share: self.reflection_share,
         }
     }
 

@@ -156,6 +156,7 @@ impl TruePlanes {
                     last_frame: last.map(&frame_name),
                     panes,
                     mirror_probability: None,
+                    reflection_share: None,
                 }
             })
             .collect()

@@ -92,16 +92,23 @@ impl Weighing {
         self.threshold
     }
 
-    /// The probability that `point` is a reflection before any test: its
-    /// landmark a mirror (then it is one), or glass (then the prior).
+    /// The probability that `point` is a reflection before any test: the
+    /// share of reflections among its landmark's echoes where their
+    /// strengths tell it; else its landmark a mirror (then it is one), or
+    /// glass (then the prior).
     pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
         let beside = !point.landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
-        let mirror = if beside || !point.single_pane {
-            0.0
-        } else {
-            point.landmark.mirror_probability.unwrap_or(0.0)
+        let own = !beside && point.single_pane;
+        let share = point.landmark.reflection_share;
+        let p = match (own, share) {
+            (true, Some(share)) => share,
+            (true, None) => {
+                let mirror = point.landmark.mirror_probability.unwrap_or(0.0);
+                mirror + (1.0 - mirror) * self.reflection_prior
+            }
+            (false, _) => self.reflection_prior,
         };
-        (mirror + (1.0 - mirror) * self.reflection_prior).clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
+        p.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
     }
 
     /// The posterior of `point`.

@@ -124,6 +124,7 @@ impl<'a> FrameViews<'a> {
                         estimate.mirror_probability
                     }),
                     levels_behind,
+                    reflection_share: estimate.reflection_share,
                     ..bp.clone()
                 })
                 .collect(),
@@ -371,7 +372,7 @@ impl<'a> FrameViews<'a> {
                     behind = t.all.total(),
                     anchors = t.anchors.total(),
                     inside = t.inside.total(),
-                    transmitted_inside = t.transmitted_inside,
+                    transmitted_inside = t.transmitted.total(),
                     ?estimate,
                     transmitted_at_level = ?t.transmitted_at_level,
                     "glass or mirror"
