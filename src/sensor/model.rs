@@ -130,6 +130,18 @@ impl SensorModel {
         BUILTIN.iter().map(|(n, _)| *n).collect()
     }
 
+    /// Whether `name` names a built-in sensor, in any of the forms
+    /// [`resolve`](Self::resolve) takes (`ouster-os0-128`,
+    /// `ouster_os0_128:2048`).
+    pub fn is_builtin(name: &str) -> bool {
+        let base = match name.rsplit_once(':') {
+            Some((b, c)) if c.parse::<usize>().is_ok() => b,
+            _ => name,
+        };
+        let snake = base.replace('-', "_");
+        BUILTIN.iter().any(|(n, _)| *n == snake)
+    }
+
     /// A built-in sensor by name (`ouster_os0_128` or `ouster-os0-128`,
     /// optionally `:COLUMNS` for one of its `column_modes`), or a sensor
     /// TOML file by path.
@@ -142,8 +154,8 @@ impl SensorModel {
         if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == snake) {
             let model = Self::from_toml(text, Path::new(&snake))?;
             return match columns {
-                Some(c) => model.with_columns(c),
-                None => Ok(model),
+                Some(c) if c != model.columns => model.with_columns(c),
+                _ => Ok(model),
             };
         }
         let path = Path::new(name_or_path);
@@ -177,6 +189,8 @@ impl SensorModel {
             )));
         }
         self.columns = columns;
+        // The name says the mode, so that it resolves to this model again.
+        self.name = format!("{}:{columns}", self.name);
         Ok(self)
     }
 
