@@ -12,5 +12,5 @@ pub mod rosette;
 pub mod scan;
 
 pub use model::{IntensityScale, ReturnMode, ScanPattern, SensorModel};
-pub use rosette::Rosette;
+pub use rosette::{FieldOfView, Rosette};
 pub use scan::OrganizedScan;

@@ -223,6 +223,16 @@ impl SensorModel {
         self.pattern == ScanPattern::Rosette
     }
 
+    /// The field of view of a rosette sensor; `None` for a spinning one
+    /// (it sees all round).
+    pub fn field_of_view(&self) -> Option<super::rosette::FieldOfView> {
+        let r = self.rosette.as_ref().filter(|_| self.is_rosette())?;
+        Some(super::rosette::FieldOfView {
+            half_h_deg: 0.5 * r.fov_h_deg,
+            half_v_deg: 0.5 * r.fov_v_deg,
+        })
+    }
+
     /// Returns per beam or pulse at most (1 to 3).
     pub fn max_returns(&self) -> u8 {
         match self.return_mode {

@@ -103,6 +103,27 @@ impl Rosette {
     }
 }
 
+/// A limited field of view about the sensor's x axis: half angles in
+/// azimuth and elevation, degrees (a rosette sensor's; a spinning sensor
+/// sees all round).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldOfView {
+    /// Half the horizontal field, degrees.
+    pub half_h_deg: f64,
+    /// Half the vertical field, degrees.
+    pub half_v_deg: f64,
+}
+
+impl FieldOfView {
+    /// Whether the direction of a sensor-frame point lies in the field.
+    #[inline]
+    pub fn contains(&self, p: &nalgebra::Point3<f64>) -> bool {
+        let az = p.y.atan2(p.x).to_degrees();
+        let el = p.z.atan2(p.x.hypot(p.y)).to_degrees();
+        az.abs() <= self.half_h_deg && el.abs() <= self.half_v_deg
+    }
+}
+
 /// Unit direction (sensor frame) of an (azimuth, elevation) in degrees.
 #[inline]
 pub fn direction(azimuth_deg: f64, elevation_deg: f64) -> [f64; 3] {
