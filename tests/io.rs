@@ -405,8 +405,8 @@ fn empty_frame() {
 fn bad_return_ring_label_and_field_count() {
     let row = |ring: &str, ret: &str, label: &str| format!("1 2 3 0 0 0 5 {ring} {ret} {label}");
     expect_err(
-        &ascii_ply(&PROPS, &[&row("3", "3", "0")]),
-        "return must be 1 or 2, got 3",
+        &ascii_ply(&PROPS, &[&row("3", "4", "0")]),
+        "return must be 1, 2 or 3 (a third return: Livox), got 4",
     );
     expect_err(
         &ascii_ply(&PROPS, &[&row("-1", "1", "0")]),

@@ -242,6 +242,7 @@ fn a_window_looking_out_of_a_small_room_is_not_a_mirror() {
         // outside is also an Obstacle where a reflection of the room's
         // floor lands on it, which no window test can see.
         labels: LabelRule::Physical,
+        sensor: None,
     };
     let seq = Sequence::from_dataset(registry::dataset(&source).unwrap());
     let obstacles = |config: &Config| {

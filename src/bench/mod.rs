@@ -146,6 +146,7 @@ pub fn run_seed(
         frames: Some(frames),
         seed: None,
         labels: LabelRule::Raycast3dref,
+        sensor: None,
     };
     let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
         .with_frame_cache(config.input.frame_cache_mb);

@@ -138,6 +138,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         scene_frames: None,
         seed: None,
         labels: LabelsArg::Raycast3dref,
+        sensor: None,
     };
     let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;

@@ -64,6 +64,7 @@ pub struct DetectArgs {
 /// Run `detect`.
 pub fn run(args: DetectArgs) -> Result<()> {
     let mut config = load_config(&args.config)?;
+    args.input.apply_sensor(&mut config)?;
     if let Some(m) = args.method {
         config.method = m.into();
     }

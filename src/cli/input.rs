@@ -10,6 +10,7 @@ use specular::config::Config;
 use specular::io;
 use specular::pipeline::registry::{self, DatasetSource};
 use specular::pipeline::Sequence;
+use specular::sensor::SensorModel;
 use specular::sim::{LabelRule, SceneSource};
 
 /// The frames to read: `--frames DIR`, `--bag PATH --topic NAME` or
@@ -54,6 +55,13 @@ pub struct InputArgs {
     /// (as the real data is labelled) or the echo's physical path.
     #[arg(long, value_enum, default_value_t = LabelsArg::Raycast3dref)]
     pub labels: LabelsArg,
+    /// The sensor: a built-in model (pandar_qt64, ouster-os0-128,
+    /// ouster-os0-128:2048, livox-avia, velodyne_hdl32e) or a sensor TOML.
+    /// A simulated scene is simulated with it instead of its own; recorded
+    /// frames are read as its (instead of the configuration's `sensor`;
+    /// frames whose header names another sensor are refused).
+    #[arg(long)]
+    pub sensor: Option<String>,
 }
 
 /// The label rule of simulated frames on the command line.
@@ -93,6 +101,16 @@ impl InputArgs {
             .or(self.scene.as_deref().map(Path::new))
             .or(self.family.as_deref().map(Path::new))
             .unwrap_or(Path::new(""))
+    }
+
+    /// The configuration with `--sensor` as its `sensor` when given (the
+    /// model of recorded frames that do not name their own).
+    pub fn apply_sensor(&self, config: &mut Config) -> Result<()> {
+        if let Some(name) = &self.sensor {
+            SensorModel::resolve(name)?;
+            config.sensor = name.clone();
+        }
+        Ok(())
     }
 
     /// Whether the input brings its own (true) poses: a simulated scene.
@@ -151,6 +169,7 @@ impl InputArgs {
                     scene,
                     frames: self.scene_frames,
                     labels: self.labels.into(),
+                    sensor: self.sensor.clone(),
                 },
                 None => bail!(
                     "give --frames DIR, --bag PATH --topic NAME, --scene NAME or --family NAME"
@@ -168,8 +187,20 @@ impl InputArgs {
             };
             bail!("{flag} brings its true poses: drop the pose file");
         }
-        let mut sequence = Sequence::from_dataset(registry::dataset(&source)?)
-            .with_frame_cache(config.input.frame_cache_mb);
+        let dataset = registry::dataset(&source)?;
+        if let (Some(given), Some(own), None) = (&self.sensor, dataset.sensor(), self.simulated()) {
+            let given = SensorModel::resolve(given)?;
+            if given.name != own.name {
+                bail!(
+                    "{}: the frames name sensor '{}' but --sensor says '{}'",
+                    self.path().display(),
+                    own.name,
+                    given.name
+                );
+            }
+        }
+        let mut sequence =
+            Sequence::from_dataset(dataset).with_frame_cache(config.input.frame_cache_mb);
         if let Some(path) = poses {
             let matching = config.input.pose_matching();
             sequence.poses = Some(io::read_poses_for(&sequence.entries, path, matching)?);

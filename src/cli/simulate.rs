@@ -9,9 +9,13 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use specular::io::{self, PlyEncoding};
-use specular::sim::{self, family, LabelCounts, PlaneTally, Scene, Simulator, TruePlanes};
+use specular::sim::{self, family, LabelCounts, PlaneTally, SceneSource, Simulator, TruePlanes};
 
 use super::input::LabelsArg;
+
+/// The sensor frames are read as when they do not name one (the
+/// configurations' `sensor`, the 3DRef QT64).
+const DEFAULT_SENSOR: &str = "pandar_qt64";
 
 /// Arguments of `simulate`.
 #[derive(Args, Debug)]
@@ -50,6 +54,13 @@ pub struct SimulateArgs {
     /// table of datasets/README.md).
     #[arg(long)]
     pub stats: bool,
+    /// Simulate with this sensor instead of the scene's: a built-in model
+    /// (ouster-os0-128, ouster-os0-128:2048, livox-avia, pandar_qt64,
+    /// velodyne_hdl32e) or a sensor TOML. The frames name it in their
+    /// header (`comment sensor NAME`) and OUT/scene.toml is the scene as
+    /// simulated, so `detect` and `slam` read them as its.
+    #[arg(long)]
+    pub sensor: Option<String>,
 }
 
 /// Run `simulate`.
@@ -60,19 +71,24 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         }
         return Ok(());
     }
-    let (scene, scene_file, seed) = match (&args.scene, &args.family) {
-        (Some(name), _) => {
-            let scene = Scene::resolve(name)?;
-            let seed = args.seed.unwrap_or(scene.seed);
-            (scene, None, seed)
-        }
-        (None, Some(name)) => {
-            let generated = family::generate(name, args.seed.unwrap_or(0))?;
-            let seed = generated.scene.seed;
-            (generated.scene, Some(generated.toml), seed)
-        }
+    let source = match (&args.scene, &args.family) {
+        (Some(name), _) => SceneSource::Named(name.clone()),
+        (None, Some(name)) => SceneSource::Family {
+            family: name.clone(),
+            seed: args.seed.unwrap_or(0),
+        },
         (None, None) => anyhow::bail!("give --scene NAME or --family NAME"),
     };
+    let (scene, scene_file) = source.resolve_for(args.sensor.as_deref())?;
+    // A family's seed draws its scene and its noise.
+    let seed = match &source {
+        SceneSource::Named(_) => args.seed.unwrap_or(scene.seed),
+        SceneSource::Family { .. } => scene.seed,
+    };
+    // Frames of the 3DRef sensor say nothing, as 3DRef's own (and as
+    // before: their bytes do not change); any other sensor is named.
+    let sensor_name = scene.sensor.model.name.clone();
+    let sensor_comment = (sensor_name != DEFAULT_SENSOR).then_some(sensor_name.as_str());
     let n = args.frames.unwrap_or(scene.frames);
     sim::check_frames(n)?;
     let sim = Simulator::new(&scene).with_label_rule(args.labels.into());
@@ -108,7 +124,8 @@ pub fn run(args: SimulateArgs) -> Result<()> {
                 return Err(specular::Error::Input("interrupted".into()));
             }
             if let Some(dir) = &frames_dir {
-                io::write_frame(&dir.join(format!("{}.ply", names[k])), &f.frame, encoding)?;
+                let path = dir.join(format!("{}.ply", names[k]));
+                io::write_frame_of(&path, &f.frame, encoding, sensor_comment)?;
             }
             let mut tally = PlaneTally::default();
             tally.add(k, &planes.observed_in(&f));
@@ -136,7 +153,7 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         guard.finish()?;
     }
     println!(
-        "simulated '{}': {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",
+        "simulated '{}' with {sensor_name}: {n} frames ({:.0} points/frame, {:.1} frames/s), {} reflective planes{}",
         scene.name,
         counts.points as f64 / n as f64,
         n as f64 / elapsed.max(1e-9),

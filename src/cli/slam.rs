@@ -65,6 +65,7 @@ pub struct SlamArgs {
 /// Run `slam`.
 pub fn run(args: SlamArgs) -> Result<()> {
     let mut config = load_config(&args.config)?;
+    args.input.apply_sensor(&mut config)?;
     if let Some(name) = &args.backend {
         config.backend.name = name.parse()?;
     }

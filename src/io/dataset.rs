@@ -100,12 +100,14 @@ pub trait Dataset: Send + Sync {
 }
 
 /// The `*.ply` frames of a directory, parsed when asked for. Nothing is
-/// read when it is opened but the file list (and the poses, when given).
+/// read when it is opened but the file list, the first frame's header (the
+/// sensor it names, `comment sensor NAME`) and the poses, when given.
 #[derive(Debug, Clone)]
 pub struct PlyDir {
     dir: PathBuf,
     entries: Vec<FrameEntry>,
     poses: Option<Vec<Isometry3<f64>>>,
+    sensor: Option<SensorModel>,
 }
 
 impl PlyDir {
@@ -115,10 +117,20 @@ impl PlyDir {
     pub fn open(dir: &Path) -> Result<Self> {
         let dir = frame_dir(dir);
         let entries = list_frames(&dir)?;
+        let sensor = match entries.first() {
+            Some(e) => match super::ply::frame_sensor(&e.path)? {
+                Some(name) => Some(SensorModel::resolve(&name).map_err(|err| {
+                    Error::format(&e.path, format!("its header names sensor '{name}': {err}"))
+                })?),
+                None => None,
+            },
+            None => None,
+        };
         Ok(Self {
             dir,
             entries,
             poses: None,
+            sensor,
         })
     }
 
@@ -150,6 +162,10 @@ impl Dataset for PlyDir {
 
     fn poses(&self) -> Option<Vec<Isometry3<f64>>> {
         self.poses.clone()
+    }
+
+    fn sensor(&self) -> Option<SensorModel> {
+        self.sensor.clone()
     }
 
     fn origin(&self) -> String {

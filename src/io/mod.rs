@@ -33,8 +33,8 @@ pub use labels::{read_labels, write_labels};
 pub use map_ply::{write_map_ply, MapPoint};
 pub use planes::{read_planes, write_planes, PlaneKind, PlaneRecord};
 pub use ply::{
-    parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames, write_frame,
-    PlyEncoding,
+    frame_sensor, parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames,
+    write_frame, write_frame_of, PlyEncoding,
 };
 pub use prob::{read_probs, read_probs_for, write_probs};
 pub use ros2_bag::{read_bag_frames, BagKind, Ros2Bag};

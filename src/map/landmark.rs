@@ -5,6 +5,7 @@ use nalgebra::{Isometry3, Point3};
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
 use crate::io::{PlaneKind, PlaneRecord};
 use crate::reflect::BoundedPlane;
+use crate::sensor::{FieldOfView, SensorModel};
 
 /// A plane seen in one frame, expressed in the world frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,6 +88,19 @@ impl Landmark {
     /// the sensor on its front side and within `range` metres of its
     /// boundary. Occlusion is not modelled, so this is an upper bound.
     pub fn frames_in_view(&self, poses: &[Isometry3<f64>], range: f64) -> usize {
+        self.frames_in_field(poses, range, None)
+    }
+
+    /// [`frames_in_view`](Self::frames_in_view) for a sensor with a
+    /// limited `field` of view (a Livox): the landmark must also lie in
+    /// the field, i.e. one of its boundary's vertices or edge midpoints,
+    /// or the point where the sensor's axis meets it.
+    pub fn frames_in_field(
+        &self,
+        poses: &[Isometry3<f64>],
+        range: f64,
+        field: Option<FieldOfView>,
+    ) -> usize {
         let bounded = self.bounded();
         poses
             .iter()
@@ -97,9 +111,38 @@ impl Landmark {
                     return false;
                 }
                 let across = bounded.boundary.signed_distance(&bounded.chart.to_2d(&o));
-                s * s + across.max(0.0).powi(2) <= range * range
+                if s * s + across.max(0.0).powi(2) > range * range {
+                    return false;
+                }
+                field.is_none_or(|f| self.in_field(pose, &bounded, &f))
             })
             .count()
+    }
+
+    /// Whether the landmark lies in the field `f` of a sensor at `pose`.
+    fn in_field(&self, pose: &Isometry3<f64>, bounded: &BoundedPlane, f: &FieldOfView) -> bool {
+        let inv = pose.inverse();
+        let n = self.boundary.len();
+        let on_edges = (0..n).any(|i| {
+            let (a, b) = (self.boundary[i], self.boundary[(i + 1) % n]);
+            f.contains(&(inv * a)) || f.contains(&(inv * Point3::from((a.coords + b.coords) * 0.5)))
+        });
+        if on_edges {
+            return true;
+        }
+        // The sensor's axis through the plane, inside the boundary.
+        let axis = pose.rotation * nalgebra::Vector3::x();
+        let o = Point3::from(pose.translation.vector);
+        let denom = self.plane.normal.dot(&axis);
+        if denom.abs() < 1e-9 {
+            return false;
+        }
+        let t = -self.plane.signed_distance(&o) / denom;
+        t > 0.0
+            && bounded
+                .boundary
+                .signed_distance(&bounded.chart.to_2d(&(o + axis * t)))
+                <= 0.0
     }
 
     /// Share of the frames that had the landmark in view
@@ -108,8 +151,15 @@ impl Landmark {
     /// see it, a plane fitted to a chance alignment of points (a reflection,
     /// points behind glass) only now and then. ORB-SLAM culls map points by
     /// the same found-over-visible ratio.
-    pub fn found_ratio(&self, poses: &[Isometry3<f64>], range: f64) -> f64 {
-        let in_view = self.frames_in_view(poses, range).max(self.observations);
+    pub fn found_ratio(
+        &self,
+        poses: &[Isometry3<f64>],
+        range: f64,
+        field: Option<FieldOfView>,
+    ) -> f64 {
+        let in_view = self
+            .frames_in_field(poses, range, field)
+            .max(self.observations);
         if in_view == 0 {
             return 0.0;
         }
@@ -176,6 +226,19 @@ pub struct LandmarkSelection {
     pub min_found_ratio: f64,
     /// A landmark is in view within this distance of its boundary, m.
     pub visibility_range: f64,
+    /// The sensor's field of view when it is limited (a Livox;
+    /// [`LandmarkSelection::for_sensor`]): a landmark outside it is not in
+    /// view. `None`: all round.
+    pub field: Option<FieldOfView>,
+}
+
+impl LandmarkSelection {
+    /// The selection for frames of `sensor`, whose field of view decides
+    /// which frames had a landmark in view.
+    pub fn for_sensor(mut self, sensor: &SensorModel) -> Self {
+        self.field = sensor.field_of_view();
+        self
+    }
 }
 
 impl std::fmt::Display for LandmarkSelection {
@@ -223,7 +286,8 @@ impl PlaneMap {
             .filter(|(_, l)| l.observations >= selection.min_observations)
             .filter(|(_, l)| {
                 selection.min_found_ratio <= 0.0
-                    || l.found_ratio(poses, selection.visibility_range) >= selection.min_found_ratio
+                    || l.found_ratio(poses, selection.visibility_range, selection.field)
+                        >= selection.min_found_ratio
             })
             .map(|(i, _)| i)
             .collect()
@@ -283,12 +347,26 @@ mod tests {
         poses.extend((0..50).map(|k| at(6.0 + k as f64 * 0.04, 0.0)));
         poses.extend((0..50).map(|_| at(0.0, 40.0)));
         assert_eq!(map.landmarks[0].frames_in_view(&poses, 10.0), 100);
-        assert!((map.landmarks[0].found_ratio(&poses, 10.0) - 0.03).abs() < 1e-12);
+        assert!((map.landmarks[0].found_ratio(&poses, 10.0, None) - 0.03).abs() < 1e-12);
         let selection = |min_found_ratio| LandmarkSelection {
             min_observations: 3,
             min_found_ratio,
             visibility_range: 10.0,
+            field: None,
         };
+        // A sensor with a limited field (a Livox) sees it only facing it.
+        let field = Some(FieldOfView {
+            half_h_deg: 35.2,
+            half_v_deg: 38.6,
+        });
+        let turned: Vec<_> = poses
+            .iter()
+            .map(|p| p * UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::PI))
+            .collect();
+        let landmark = &map.landmarks[0];
+        assert_eq!(landmark.frames_in_field(&poses, 10.0, field), 100);
+        assert_eq!(landmark.frames_in_field(&turned, 10.0, field), 0);
+        assert_eq!(landmark.frames_in_view(&turned, 10.0), 100);
         assert!(map.reliable(&poses, &selection(0.05)).is_empty());
         assert_eq!(map.reliable(&poses, &selection(0.0)), vec![0]);
         map.landmarks[0].observations = 20;

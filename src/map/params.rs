@@ -68,6 +68,7 @@ impl MapParams {
             min_observations: self.min_observations,
             min_found_ratio: self.min_found_ratio,
             visibility_range: self.visibility_range,
+            field: None,
         }
     }
 }

@@ -39,6 +39,9 @@ pub enum DatasetSource {
         seed: Option<u64>,
         /// Which truth the labels carry (default: 3DRef's ray-cast rule).
         labels: LabelRule,
+        /// The sensor model instead of the scene's (a built-in name or a
+        /// sensor file).
+        sensor: Option<String>,
     },
 }
 
@@ -53,7 +56,11 @@ pub fn dataset(source: &DatasetSource) -> Result<Arc<dyn Dataset>> {
             frames,
             seed,
             labels,
-        } => Arc::new(SimDataset::new(&scene.resolve()?, *frames, *seed)?.with_label_rule(*labels)),
+            sensor,
+        } => {
+            let (scene, _) = scene.resolve_for(sensor.as_deref())?;
+            Arc::new(SimDataset::new(&scene, *frames, *seed)?.with_label_rule(*labels))
+        }
     })
 }
 

@@ -14,9 +14,17 @@ use crate::{Error, Result};
 /// Check that a frame can be processed: it has points (the error names
 /// the file the frame came from). A frame whose every point was set aside
 /// (all NaN, say: a sensor that saw nothing) is not an error: it has
-/// nothing to classify and its labels are all 0.
-pub(crate) fn check_points(sequence: &Sequence, index: usize, frame: &Frame) -> Result<()> {
-    if frame.points.is_empty() && frame.dropped_non_finite == 0 {
+/// nothing to classify and its labels are all 0; nor is an empty frame of
+/// a sensor with a limited field of view (a Livox facing open space or a
+/// wall nearer than its minimum range sees nothing).
+pub(crate) fn check_points(
+    sequence: &Sequence,
+    index: usize,
+    frame: &Frame,
+    sensor: &SensorModel,
+) -> Result<()> {
+    let may_see_nothing = frame.dropped_non_finite > 0 || sensor.field_of_view().is_some();
+    if frame.points.is_empty() && !may_see_nothing {
         return Err(Error::Input(format!(
             "{}: frame has no points",
             sequence.path(index).display()
@@ -94,7 +102,7 @@ pub fn run_single_scan_into(
     let mut second_returns = 0;
     sink.begin(&[])?;
     let work = |k: usize, frame: &Frame| {
-        check_points(sequence, k, frame)?;
+        check_points(sequence, k, frame, &sensor)?;
         let (scan, detection, mut t) =
             organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
         let start = Instant::now();

@@ -147,7 +147,7 @@ pub fn track_sequence(
     let reading = sequence.stream_all(
         "track",
         |k, frame| {
-            check_points(sequence, k, frame)?;
+            check_points(sequence, k, frame, &sensor)?;
             frame_features(
                 frame,
                 &sensor,

@@ -1,10 +1,12 @@
-//! Spinning-LiDAR sensor descriptions.
+//! LiDAR sensor descriptions: spinning sensors with rings, and rosette
+//! scanners whose points are binned into a spherical grid of directions.
 
 use std::path::Path;
 
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::rosette::Rosette;
 pub use crate::cloud::IntensityScale;
 use crate::{Error, Result};
 
@@ -16,12 +18,37 @@ pub enum ReturnMode {
     FirstLast,
     /// Strongest and last return (Velodyne HDL-32E).
     StrongestLast,
+    /// The strongest and the second-strongest return, in that order
+    /// (Ouster OS0-128, default `return_order` STRONGEST_TO_WEAKEST): the
+    /// order is by echo strength, not range, so return 2 may lie in front
+    /// of return 1.
+    StrongestSecond,
+    /// Up to three returns per pulse (Livox Avia triple mode): the three
+    /// strongest echoes, numbered 1, 2, 3 by range, nearest first (which
+    /// echoes the Avia keeps is not documented; this is the assumption).
+    Triple,
     /// A single return per beam (no dual-return information).
     Single,
 }
 
-/// A spinning LiDAR: ring elevations (ring 0 at the bottom), columns per
-/// revolution, range limits and return mode.
+/// How a sensor's beams sweep its field.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScanPattern {
+    /// A spinning head: rings at fixed elevations, columns of equal
+    /// azimuth steps (Hesai, Velodyne, Ouster).
+    #[default]
+    Rings,
+    /// A non-repetitive rosette over a limited field (Livox Avia), no
+    /// rings: the `[rosette]` table gives it, and its points are binned
+    /// into a spherical grid of directions that plays the rings' part.
+    Rosette,
+}
+
+/// A LiDAR: ring elevations (ring 0 at the bottom), columns per
+/// revolution, range limits and return mode. For a [`ScanPattern::Rosette`]
+/// sensor the rings and columns are its grid of directions, derived from
+/// the `[rosette]` table.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorModel {
@@ -30,8 +57,16 @@ pub struct SensorModel {
     /// Human-readable description.
     #[serde(default)]
     pub description: String,
-    /// Columns (azimuth steps) per revolution.
+    /// How the beams sweep the field (default: rings).
+    #[serde(default)]
+    pub pattern: ScanPattern,
+    /// Columns (azimuth steps) per revolution (derived for a rosette).
+    #[serde(default)]
     pub columns: usize,
+    /// Column counts the sensor can be run with (`name:COLUMNS` picks
+    /// one); empty: only `columns`.
+    #[serde(default)]
+    pub column_modes: Vec<usize>,
     /// Revolutions per second.
     pub rate_hz: f64,
     /// Minimum range, metres.
@@ -42,7 +77,9 @@ pub struct SensorModel {
     pub return_mode: ReturnMode,
     /// Two echoes closer than this along a beam cannot be separated, metres.
     pub range_resolution: f64,
-    /// Elevation of each ring in degrees, ring 0 (bottom) first.
+    /// Elevation of each ring in degrees, ring 0 (bottom) first (derived
+    /// for a rosette: its grid rows).
+    #[serde(default)]
     pub elevations_deg: Vec<f64>,
     /// What the intensities it reports measure (default: a reflectivity).
     /// Frames that say otherwise (a PLY comment, the simulator) win.
@@ -53,6 +90,18 @@ pub struct SensorModel {
     /// layout; a sensor without them gives no intensity-peak candidates.
     #[serde(default)]
     pub intensity_peak: Option<crate::reflect::IntensityPeakParams>,
+    /// The rosette of a [`ScanPattern::Rosette`] sensor.
+    #[serde(default)]
+    pub rosette: Option<Rosette>,
+    /// What the simulator writes as this sensor's intensity: the echo's
+    /// received power (default, as for the QT64 so far) or a
+    /// range-compensated reflectivity (Livox: 0-150 diffuse).
+    #[serde(default = "raw_power")]
+    pub simulated_intensity: IntensityScale,
+}
+
+fn raw_power() -> IntensityScale {
+    IntensityScale::RawPower
 }
 
 /// Built-in sensor descriptions, embedded so a fresh clone needs no files.
@@ -65,6 +114,14 @@ const BUILTIN: &[(&str, &str)] = &[
         "velodyne_hdl32e",
         include_str!("../../configs/sensors/velodyne_hdl32e.toml"),
     ),
+    (
+        "ouster_os0_128",
+        include_str!("../../configs/sensors/ouster_os0_128.toml"),
+    ),
+    (
+        "livox_avia",
+        include_str!("../../configs/sensors/livox_avia.toml"),
+    ),
 ];
 
 impl SensorModel {
@@ -73,10 +130,33 @@ impl SensorModel {
         BUILTIN.iter().map(|(n, _)| *n).collect()
     }
 
-    /// A built-in sensor by name, or a sensor TOML file by path.
+    /// Whether `name` names a built-in sensor, in any of the forms
+    /// [`resolve`](Self::resolve) takes (`ouster-os0-128`,
+    /// `ouster_os0_128:2048`).
+    pub fn is_builtin(name: &str) -> bool {
+        let base = match name.rsplit_once(':') {
+            Some((b, c)) if c.parse::<usize>().is_ok() => b,
+            _ => name,
+        };
+        let snake = base.replace('-', "_");
+        BUILTIN.iter().any(|(n, _)| *n == snake)
+    }
+
+    /// A built-in sensor by name (`ouster_os0_128` or `ouster-os0-128`,
+    /// optionally `:COLUMNS` for one of its `column_modes`), or a sensor
+    /// TOML file by path.
     pub fn resolve(name_or_path: &str) -> Result<Self> {
-        if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
-            return Self::from_toml(text, Path::new(name_or_path));
+        let (base, columns) = match name_or_path.rsplit_once(':') {
+            Some((b, c)) if c.parse::<usize>().is_ok() => (b, c.parse::<usize>().ok()),
+            _ => (name_or_path, None),
+        };
+        let snake = base.replace('-', "_");
+        if let Some((_, text)) = BUILTIN.iter().find(|(n, _)| *n == snake) {
+            let model = Self::from_toml(text, Path::new(&snake))?;
+            return match columns {
+                Some(c) if c != model.columns => model.with_columns(c),
+                _ => Ok(model),
+            };
         }
         let path = Path::new(name_or_path);
         if path.exists() {
@@ -91,9 +171,75 @@ impl SensorModel {
 
     /// Parse and validate a sensor description (`origin` names it in errors).
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        let model: Self = toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        let mut model: Self =
+            toml::from_str(text).map_err(|e| Error::format(origin, e.to_string()))?;
+        model.check_pattern(origin)?;
+        super::rosette::fill_grid(&mut model);
         model.validate(origin)?;
         Ok(model)
+    }
+
+    /// The same sensor run with `columns` columns, one of its
+    /// `column_modes` (e.g. the OS0-128's 512, 1024 or 2048).
+    pub fn with_columns(mut self, columns: usize) -> Result<Self> {
+        if columns != self.columns && !self.column_modes.contains(&columns) {
+            return Err(Error::Config(format!(
+                "sensor '{}' has no mode with {columns} columns (modes: {:?})",
+                self.name, self.column_modes
+            )));
+        }
+        self.columns = columns;
+        // The name says the mode, so that it resolves to this model again.
+        self.name = format!("{}:{columns}", self.name);
+        Ok(self)
+    }
+
+    /// A rosette sensor has its `[rosette]` table and no rings of its own;
+    /// a ring sensor has no `[rosette]` table.
+    fn check_pattern(&self, origin: &Path) -> Result<()> {
+        let bad = |m: String| Err(Error::format(origin, m));
+        match (self.pattern, &self.rosette) {
+            (ScanPattern::Rings, None) => Ok(()),
+            (ScanPattern::Rings, Some(_)) => {
+                bad("a [rosette] table needs pattern = \"rosette\"".into())
+            }
+            (ScanPattern::Rosette, None) => {
+                bad("pattern = \"rosette\" needs a [rosette] table".into())
+            }
+            (ScanPattern::Rosette, Some(r)) => {
+                if !self.elevations_deg.is_empty() || self.columns != 0 {
+                    return bad(
+                        "a rosette sensor has no elevations_deg or columns: its grid comes from [rosette] grid_deg".into(),
+                    );
+                }
+                r.validate().or_else(bad)
+            }
+        }
+    }
+
+    /// Whether the sensor scans a rosette (its rings are a grid of
+    /// directions, its returns paired by emission).
+    pub fn is_rosette(&self) -> bool {
+        self.pattern == ScanPattern::Rosette
+    }
+
+    /// The field of view of a rosette sensor; `None` for a spinning one
+    /// (it sees all round).
+    pub fn field_of_view(&self) -> Option<super::rosette::FieldOfView> {
+        let r = self.rosette.as_ref().filter(|_| self.is_rosette())?;
+        Some(super::rosette::FieldOfView {
+            half_h_deg: 0.5 * r.fov_h_deg,
+            half_v_deg: 0.5 * r.fov_v_deg,
+        })
+    }
+
+    /// Returns per beam or pulse at most (1 to 3).
+    pub fn max_returns(&self) -> u8 {
+        match self.return_mode {
+            ReturnMode::Single => 1,
+            ReturnMode::Triple => 3,
+            _ => 2,
+        }
     }
 
     fn validate(&self, origin: &Path) -> Result<()> {
@@ -112,6 +258,9 @@ impl SensorModel {
         }
         if !(self.rate_hz > 0.0) || !(self.range_resolution >= 0.0) {
             return bad("rate_hz must be positive and range_resolution non-negative".into());
+        }
+        if let Some(c) = self.column_modes.iter().find(|&&c| c < 4) {
+            return bad(format!("column_modes must be at least 4, got {c}"));
         }
         Ok(())
     }
@@ -221,6 +370,41 @@ mod tests {
             }
         }
         assert_eq!(qt.ring_of(&Point3::new(0.0, 0.0, 5.0)), None);
+    }
+
+    #[test]
+    fn ouster_and_livox_have_their_documented_shape() {
+        let os = SensorModel::resolve("ouster-os0-128").unwrap();
+        assert_eq!(os.name, "ouster_os0_128");
+        assert_eq!((os.rings(), os.columns), (128, 1024));
+        assert_eq!(os.return_mode, ReturnMode::StrongestSecond);
+        assert_eq!(os.intensity, IntensityScale::RawPower);
+        let span = os.elevations_deg[127] - os.elevations_deg[0];
+        assert!((span - 90.46).abs() < 1e-9, "{span}");
+        assert_eq!(
+            SensorModel::resolve("ouster_os0_128:2048").unwrap().columns,
+            2048
+        );
+        let e = SensorModel::resolve("ouster-os0-128:1000")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no mode with 1000 columns"), "{e}");
+        let avia = SensorModel::resolve("livox-avia").unwrap();
+        assert!(avia.is_rosette() && !os.is_rosette());
+        assert_eq!(avia.max_returns(), 3);
+        let r = avia.rosette.as_ref().unwrap();
+        assert_eq!(avia.rings(), r.grid_rows());
+        assert_eq!(avia.columns, r.grid_columns());
+        assert_eq!(avia.simulated_intensity, IntensityScale::Reflectivity);
+    }
+
+    #[test]
+    fn a_rosette_without_its_table_is_a_clear_error() {
+        let text = "name = \"x\"\nrate_hz = 10.0\nmin_range = 0.1\nmax_range = 9.0\nreturn_mode = \"triple\"\nrange_resolution = 0.1\npattern = \"rosette\"\n";
+        let e = SensorModel::from_toml(text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x.toml") && e.contains("[rosette]"), "{e}");
     }
 
     #[test]

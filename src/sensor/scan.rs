@@ -12,6 +12,14 @@ const NONE: u32 = u32::MAX;
 
 /// Both returns of every beam, indexed by (ring, column).
 ///
+/// For a rosette sensor the (ring, column) grid is its spherical grid of
+/// directions ([`crate::sensor::rosette`]): a point's cell comes from its
+/// direction, not its `ring` field, and the returns of one emission (a
+/// return 1 and the returns after it in file order, as the simulator and
+/// the Livox driver write them) are paired: the cell keeps the first
+/// emission that reaches it, with its last return as return 2; the other
+/// emissions in that cell count as collisions.
+///
 /// Return 1 (first/strongest) and return 2 (last) are kept per cell; a cell
 /// whose return 2 was not stored (3DRef stores it only where it differs) has a
 /// single return that is both first and last. When two return-1 points fall in
@@ -89,6 +97,9 @@ impl OrganizedScan {
     /// Organize `frame` on `sensor`'s grid. Errors (naming the frame) when a
     /// point's ring is outside the sensor's rings.
     pub fn build(frame: &Frame, sensor: &SensorModel) -> Result<Self> {
+        if sensor.is_rosette() {
+            return Ok(Self::build_by_emission(frame, sensor));
+        }
         let (rings, columns) = (sensor.rings(), sensor.columns);
         let cells = rings * columns;
         let mut first = vec![NONE; cells];
@@ -98,7 +109,8 @@ impl OrganizedScan {
         // Return 1 first, so return 2 can always find its partner cell.
         for pass in [1u8, 2u8] {
             for (i, p) in frame.points.iter().enumerate() {
-                if p.ret != pass {
+                // Pass 2 takes every later return (a third one too).
+                if (p.ret == 1) != (pass == 1) {
                     continue;
                 }
                 let ring = p.ring as usize;
@@ -127,6 +139,57 @@ impl OrganizedScan {
             cell_of_point,
             collisions,
         })
+    }
+
+    /// Organize the points of a rosette sensor on its grid of directions,
+    /// pairing the returns of each emission (see the type's doc).
+    fn build_by_emission(frame: &Frame, sensor: &SensorModel) -> Self {
+        let (rings, columns) = (sensor.rings(), sensor.columns);
+        let cells = rings * columns;
+        let mut first = vec![NONE; cells];
+        let mut second = vec![NONE; cells];
+        let mut cell_of_point = vec![NONE; frame.points.len()];
+        let mut collisions = 0;
+        // A later return belongs to the emission before it when it lies
+        // along the same direction (within a tenth of a grid cell).
+        let cell_deg = sensor.rosette.as_ref().map_or(0.5, |r| r.grid_deg);
+        let same_direction = (0.1 * cell_deg).to_radians().cos();
+        // The cell the current emission claimed, and its unit direction.
+        let mut emission: Option<(usize, Vector3<f64>)> = None;
+        for (i, p) in frame.points.iter().enumerate() {
+            let q = p.position();
+            let dir = q.coords / q.coords.norm().max(1e-12);
+            if p.ret <= 1 {
+                let cell = grid_cell(sensor, &q);
+                cell_of_point[i] = cell as u32;
+                emission = (first[cell] == NONE).then_some((cell, dir));
+                match emission {
+                    Some((c, _)) => first[c] = i as u32,
+                    None => collisions += 1,
+                }
+                continue;
+            }
+            match emission {
+                // The emission's later return, in its cell: the last one
+                // is kept.
+                Some((c, d)) if d.dot(&dir) >= same_direction => {
+                    cell_of_point[i] = c as u32;
+                    second[c] = i as u32;
+                }
+                _ => {
+                    cell_of_point[i] = grid_cell(sensor, &q) as u32;
+                    collisions += 1;
+                }
+            }
+        }
+        Self {
+            rings,
+            columns,
+            first,
+            second,
+            cell_of_point,
+            collisions,
+        }
     }
 
     /// Number of rings (rows).
@@ -209,6 +272,16 @@ impl OrganizedScan {
             .filter(|(_, (f, s))| **f != NONE && **s != NONE)
             .map(|(c, (f, s))| (c, *f as usize, *s as usize))
     }
+}
+
+/// The grid cell of a direction: its nearest row (clamped to the field)
+/// and its column.
+#[inline]
+fn grid_cell(sensor: &SensorModel, q: &nalgebra::Point3<f64>) -> usize {
+    let ring = sensor
+        .ring_of(q)
+        .unwrap_or_else(|| if q.z < 0.0 { 0 } else { sensor.rings() - 1 });
+    ring * sensor.columns + sensor.column_of(q.x, q.y)
 }
 
 #[cfg(test)]

@@ -98,6 +98,28 @@ impl SceneSource {
             SceneSource::Family { family, seed } => Ok(family::generate(family, *seed)?.scene),
         }
     }
+
+    /// The scene with its sensor model replaced by `sensor` when given
+    /// (`--sensor ouster-os0-128`), and the scene file to write beside its
+    /// frames: a family's (drawn) or a changed one's; `None` for a named
+    /// scene as it is.
+    pub fn resolve_for(&self, sensor: Option<&str>) -> Result<(Scene, Option<String>)> {
+        let (text, origin) = match (self, sensor) {
+            (SceneSource::Named(name), None) => return Ok((Scene::resolve(name)?, None)),
+            (SceneSource::Named(name), Some(_)) => Scene::text_of(name)?,
+            (SceneSource::Family { family, seed }, _) => {
+                let generated = family::generate(family, *seed)?;
+                if sensor.is_none() {
+                    return Ok((generated.scene, Some(generated.toml)));
+                }
+                let origin = std::path::PathBuf::from(format!("family:{family}/{seed}"));
+                (generated.toml, origin)
+            }
+        };
+        let sensor = sensor.unwrap_or_default();
+        let (scene, toml) = Scene::with_sensor(&text, &origin, sensor)?;
+        Ok((scene, Some(toml)))
+    }
 }
 
 impl std::fmt::Display for SceneSource {

@@ -7,8 +7,9 @@
 //! 2. **Detect**: echoes below the detection limit, or outside the sensor's
 //!    range limits, are lost.
 //! 3. **Select** by return mode: first + last (nearest and farthest),
-//!    strongest + last, or the strongest alone. The second return exists
-//!    only when it is a different echo from the first.
+//!    strongest + last, strongest + second strongest (ordered by
+//!    strength), the three strongest (ordered by range), or the strongest
+//!    alone. A later return exists only when it is a different echo.
 
 use super::echo::Echo;
 use crate::sensor::ReturnMode;
@@ -83,7 +84,48 @@ pub fn select(echoes: &[Echo], mode: ReturnMode) -> (Option<Echo>, Option<Echo>)
             (last_index != strongest).then(|| echoes[last_index]),
         ),
         ReturnMode::Single => (Some(echoes[strongest]), None),
+        ReturnMode::StrongestSecond => {
+            let second = echoes
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != strongest)
+                .max_by(|a, b| a.1.signal.total_cmp(&b.1.signal).then(b.0.cmp(&a.0)))
+                .map(|(_, e)| *e);
+            (Some(echoes[strongest]), second)
+        }
+        ReturnMode::Triple => {
+            let t = select_triple(echoes);
+            (t[0], t[1])
+        }
     }
+}
+
+/// Up to three returns of a pulse: the three strongest detected echoes
+/// (ties to the nearer), in range order, nearest first; `echoes` sorted by
+/// range. Allocates nothing.
+pub fn select_triple(echoes: &[Echo]) -> [Option<Echo>; 3] {
+    // The indices of the three strongest, kept sorted by strength.
+    let mut best: [Option<usize>; 3] = [None; 3];
+    let stronger = |i: usize, j: usize| echoes[i].signal > echoes[j].signal;
+    for i in 0..echoes.len() {
+        let mut cand = i;
+        for slot in best.iter_mut() {
+            match *slot {
+                None => {
+                    *slot = Some(cand);
+                    break;
+                }
+                Some(j) if stronger(cand, j) => {
+                    *slot = Some(cand);
+                    cand = j;
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    let mut idx = best;
+    idx.sort_by_key(|i| i.unwrap_or(usize::MAX));
+    idx.map(|i| i.map(|i| echoes[i]))
 }
 
 #[cfg(test)]
@@ -128,6 +170,29 @@ mod tests {
         let (a, b) = select(&w[..1], ReturnMode::FirstLast);
         assert_eq!((a.unwrap().label, b), (2, None));
         assert_eq!(select(&[], ReturnMode::FirstLast), (None, None));
+    }
+
+    #[test]
+    fn ouster_and_livox_modes() {
+        // Strength order: the second strongest may be nearer.
+        let v = [e(2.0, 0.5, 2), e(7.0, 5.0, 6), e(9.0, 0.1, 5)];
+        let (a, b) = select(&v, ReturnMode::StrongestSecond);
+        assert_eq!((a.unwrap().label, b.unwrap().label), (6, 2));
+        let (a, b) = select(&v[1..2], ReturnMode::StrongestSecond);
+        assert_eq!((a.unwrap().label, b), (6, None));
+        // The three strongest of four, by range.
+        let w = [
+            e(1.0, 0.05, 1),
+            e(2.0, 0.5, 2),
+            e(7.0, 5.0, 6),
+            e(9.0, 0.2, 5),
+        ];
+        let t = select_triple(&w);
+        let labels: Vec<u8> = t.iter().flatten().map(|e| e.label).collect();
+        assert_eq!(labels, [2, 6, 5]);
+        let t = select_triple(&w[2..3]);
+        assert_eq!((t[0].unwrap().label, t[1], t[2]), (6, None, None));
+        assert_eq!(select_triple(&[]), [None, None, None]);
     }
 
     #[test]

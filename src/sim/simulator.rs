@@ -2,6 +2,13 @@
 //! of frame `k`, turn its echoes into returns, add range noise and write the
 //! points in the sensor frame.
 //!
+//! A spinning sensor casts the same beams every frame (its rings ×
+//! columns); a rosette sensor ([`Rosette`]) casts the pulses of its
+//! pattern over the frame's period, which differ from frame to frame, and
+//! writes each point's grid row as its ring. Each sensor's returns follow
+//! its return mode ([`returns::select`], [`returns::select_triple`]) and its
+//! intensities its scale (`simulated_intensity`).
+//!
 //! Frames are independent: frame `k` depends only on the scene, `k` and the
 //! run's seed (through [`frame_seed`]), so they can be generated in any
 //! order or in parallel and the output is identical.
@@ -17,6 +24,12 @@ use super::scene::Scene;
 use crate::cloud::{Frame, IntensityScale, Point};
 use crate::io::StampedPose;
 use crate::rng::SplitMix64;
+use crate::sensor::{ReturnMode, Rosette};
+
+/// A simulated reflectivity reads this for a white Lambertian target at
+/// normal incidence: the top of a reflectivity byte's diffuse range (Livox:
+/// 0-150 diffuse, 151-255 retroreflective).
+const DIFFUSE_FULL_SCALE: f64 = 150.0;
 
 /// Timestamp of frame 0, seconds (frame `k` is at `EPOCH + k / rate`).
 pub const EPOCH_SECONDS: u64 = 1_700_000_000;
@@ -63,8 +76,11 @@ pub struct Simulator {
     scene: Scene,
     tracer: BeamTracer,
     /// Unit beam directions in the sensor frame, column-major (all rings
-    /// of a column in turn), without the columns of the blind sector.
+    /// of a column in turn), without the columns of the blind sector (empty
+    /// for a rosette sensor).
     beams: Vec<DVec3>,
+    /// The rosette of a rosette sensor, and its pulses per frame.
+    rosette: Option<(Rosette, usize)>,
     min_signal: f64,
     period_us: u64,
     /// Material class of every surface (for the ray-cast labels).
@@ -87,8 +103,17 @@ impl Simulator {
             min_signal,
         );
         let rings = model.rings();
-        let mut beams = Vec::with_capacity(rings * model.columns);
-        for col in 0..model.columns {
+        let rosette = model
+            .rosette
+            .clone()
+            .map(|r| {
+                let pulses = (r.pulses_per_second / model.rate_hz).round() as usize;
+                (r, pulses)
+            })
+            .filter(|_| model.is_rosette());
+        let spinning = if rosette.is_some() { 0 } else { model.columns };
+        let mut beams = Vec::with_capacity(rings * spinning);
+        for col in 0..spinning {
             if sensor.is_blind(model.column_azimuth_deg(col)) {
                 continue;
             }
@@ -107,6 +132,7 @@ impl Simulator {
             scene: scene.clone(),
             tracer,
             beams,
+            rosette,
             min_signal,
             period_us,
             kinds,
@@ -131,9 +157,28 @@ impl Simulator {
         &self.scene
     }
 
-    /// Beams cast per frame (the pattern without the blind sector).
+    /// Beams cast per frame (the pattern without the blind sector; a
+    /// rosette's pulses per frame).
     pub fn beam_count(&self) -> usize {
-        self.beams.len()
+        match &self.rosette {
+            Some((_, pulses)) => *pulses,
+            None => self.beams.len(),
+        }
+    }
+
+    /// Sensor-frame direction and ring (grid row) of pulse `i` of a
+    /// rosette sensor's frame `k`; `None` in the blind sector.
+    #[inline]
+    fn rosette_pulse(&self, rosette: &Rosette, k: usize, i: usize) -> Option<(DVec3, u16)> {
+        let t = (k as f64 * self.period_us as f64 * 1e-6) + i as f64 / rosette.pulses_per_second;
+        let (az, el) = rosette.angles_deg(t);
+        if self.scene.sensor.is_blind(az) {
+            return None;
+        }
+        let d = crate::sensor::rosette::direction(az, el);
+        let model = &self.scene.sensor.model;
+        let ring = model.ring_of(&nalgebra::Point3::new(d[0], d[1], d[2]))?;
+        Some((DVec3::new(d[0], d[1], d[2]), ring as u16))
     }
 
     /// The beam tracer (for inspecting single beams).
@@ -202,11 +247,19 @@ impl Simulator {
         let crop = sensor.crop_range.unwrap_or(f64::INFINITY);
         let res = model.range_resolution;
         let rings = model.rings();
-        let mut points = Vec::with_capacity(self.beams.len() + self.beams.len() / 16);
+        let beams = self.beam_count();
+        let mut points = Vec::with_capacity(beams + beams / 16);
         let mut truth = Vec::with_capacity(points.capacity());
         let mut echoes = Vec::with_capacity(8);
-        for (i, &dir_s) in self.beams.iter().enumerate() {
-            let ring = (i % rings) as u16;
+        let reflectivity = model.simulated_intensity == IntensityScale::Reflectivity;
+        for i in 0..beams {
+            let (dir_s, ring) = match &self.rosette {
+                Some((r, _)) => match self.rosette_pulse(r, k, i) {
+                    Some(pulse) => pulse,
+                    None => continue,
+                },
+                None => (self.beams[i], (i % rings) as u16),
+            };
             if sensor.dropout > 0.0 && rng.unit() < sensor.dropout {
                 continue;
             }
@@ -231,9 +284,15 @@ impl Simulator {
             };
             let mut emit = |e: &Echo, r: f64, ret: u8| {
                 let p = dir_s * r;
+                let intensity = if reflectivity {
+                    // σ·A: the signal with the range's 1/r² undone.
+                    e.signal * e.range * e.range * DIFFUSE_FULL_SCALE
+                } else {
+                    e.signal * sensor.intensity_gain
+                };
                 points.push(Point {
                     xyz: [p.x as f32, p.y as f32, p.z as f32],
-                    intensity: (e.signal * sensor.intensity_gain).min(255.0).round() as f32,
+                    intensity: intensity.min(255.0).round() as f32,
                     ring,
                     ret,
                     label: label_of(e, r),
@@ -252,6 +311,16 @@ impl Simulator {
                     emit(&e, r2, 2);
                 }
             }
+            if model.return_mode == ReturnMode::Triple {
+                // The third of three returns, where it differs from both.
+                if let Some(e) = returns::select_triple(&echoes)[2] {
+                    let r3 = noisy(e.range, sensor.range_noise, &mut rng);
+                    let r2 = second.map_or(r1, |(_, r2)| r2);
+                    if r3 <= crop && (r3 - r1).abs() > res && (r3 - r2).abs() > res {
+                        emit(&e, r3, 3);
+                    }
+                }
+            }
         }
         SimFrame {
             frame: Frame {
@@ -260,8 +329,8 @@ impl Simulator {
                 points,
                 has_labels: true,
                 dropped_non_finite: 0,
-                // The echo's signal, not a calibrated reflectivity.
-                intensity_scale: Some(IntensityScale::RawPower),
+                // The echo's signal, or the sensor's reflectivity.
+                intensity_scale: Some(model.simulated_intensity),
             },
             pose,
             truth,

@@ -149,7 +149,7 @@ fn parse_compact(records: &[u8]) -> Option<Vec<Point>> {
         .chunks_exact(20)
         .map(|r| {
             let (ret, label) = (r[18], r[19]);
-            valid &= (ret == 1 || ret == 2) && label <= 6;
+            valid &= (1..=3).contains(&ret) && label <= 6;
             Point {
                 xyz: [f(r, 0), f(r, 4), f(r, 8)],
                 intensity: f(r, 12),

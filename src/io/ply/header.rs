@@ -94,6 +94,10 @@ pub(super) struct Header {
     /// What the intensities measure, from a `comment intensity_scale NAME`
     /// line (specular writes one for its simulated frames).
     pub(super) intensity_scale: Option<IntensityScale>,
+    /// The sensor the frame was taken with, from a `comment sensor NAME`
+    /// line (specular writes one for simulated frames of a sensor other
+    /// than the 3DRef QT64).
+    pub(super) sensor: Option<String>,
 }
 
 /// Parse the header at the start of a file; the error says what is wrong
@@ -105,6 +109,7 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
     let mut elements: Vec<Element> = Vec::new();
     let mut vertex = None;
     let mut intensity_scale = None;
+    let mut sensor = None;
     loop {
         if pos >= bytes.len() {
             return Err(if line_no == 0 {
@@ -150,6 +155,14 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
                     )
                 })?);
             }
+            "comment" if rest.first() == Some(&"sensor") => match rest.get(1) {
+                Some(name) if rest.len() == 2 => sensor = Some(name.to_string()),
+                _ => {
+                    return Err(format!(
+                        "header line {line_no}: 'comment sensor' takes one sensor name"
+                    ))
+                }
+            },
             "comment" | "obj_info" => {}
             "format" => {
                 if format.is_some() {
@@ -251,5 +264,6 @@ pub(super) fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> 
         body_start: pos,
         lines: line_no,
         intensity_scale,
+        sensor,
     })
 }

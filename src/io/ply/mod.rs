@@ -7,7 +7,9 @@
 //! Elements other than `vertex` are skipped; list properties are rejected.
 //! A header comment `comment intensity_scale raw-power` (or `reflectivity`)
 //! says what the intensities measure ([`crate::cloud::IntensityScale`]);
-//! the writer adds it for frames that know (the simulator's).
+//! the writer adds it for frames that know (the simulator's). A comment
+//! `comment sensor NAME` names the sensor model ([`frame_sensor`]); the
+//! simulator writes it for every sensor but the 3DRef QT64.
 //!
 //! The ascii body is parsed from bytes without allocation per point, one
 //! token at a time, the numbers by the `fast-float2` crate, which gives
@@ -41,5 +43,7 @@ mod read;
 mod vertex;
 mod write;
 
-pub use read::{parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames};
-pub use write::{write_frame, PlyEncoding};
+pub use read::{
+    frame_sensor, parse_frame, parse_frame_full, read_frame, read_frame_full, read_frames,
+};
+pub use write::{write_frame, write_frame_of, PlyEncoding};

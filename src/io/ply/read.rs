@@ -41,6 +41,20 @@ pub fn read_frames(paths: &[PathBuf]) -> Result<Vec<Frame>> {
     results.into_iter().collect()
 }
 
+/// The sensor a PLY frame names in its header (`comment sensor NAME`),
+/// reading no more than the header; `None` when it names none.
+pub fn frame_sensor(path: &Path) -> Result<Option<String>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    // A header is a few hundred bytes; 64 KiB holds any sane one.
+    let mut bytes = Vec::with_capacity(4096);
+    file.take(64 * 1024)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    let header = parse_header(&bytes).map_err(|m| Error::format(path, m))?;
+    Ok(header.sensor)
+}
+
 /// Parse a frame from the bytes of a PLY file (`path` names it in errors and
 /// gives the stem/timestamp).
 pub fn parse_frame(bytes: &[u8], path: &Path) -> Result<Frame> {

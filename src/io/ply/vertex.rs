@@ -119,7 +119,7 @@ pub(super) fn store_int(
             }
         }
         Slot::Return => {
-            if v == 1.0 || v == 2.0 {
+            if v == 1.0 || v == 2.0 || v == 3.0 {
                 p.ret = v as u8;
                 return Ok(());
             }
@@ -141,7 +141,7 @@ pub(super) fn store_int(
 fn bad_int(slot: Slot, v: f64, loc: Loc) -> String {
     match slot {
         Slot::Ring => format!("{loc}: ring must be an integer in 0..=65535, got {v}"),
-        Slot::Return => format!("{loc}: return must be 1 or 2, got {v}"),
+        Slot::Return => format!("{loc}: return must be 1, 2 or 3 (a third return: Livox), got {v}"),
         _ => format!("{loc}: label must be an integer in 0..=6, got {v}"),
     }
 }

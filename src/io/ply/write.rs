@@ -26,6 +26,18 @@ pub enum PlyEncoding {
 /// The ascii encoding writes floats in their shortest round-trip form, so
 /// reading the file back gives identical points.
 pub fn write_frame(path: &Path, frame: &Frame, encoding: PlyEncoding) -> Result<()> {
+    write_frame_of(path, frame, encoding, None)
+}
+
+/// [`write_frame`], saying in a header comment which sensor took the frame
+/// (`comment sensor ouster_os0_128`) when `sensor` is given, so that a
+/// reader picks its model ([`frame_sensor`](super::frame_sensor)).
+pub fn write_frame_of(
+    path: &Path,
+    frame: &Frame,
+    encoding: PlyEncoding,
+    sensor: Option<&str>,
+) -> Result<()> {
     crate::io::write_atomic(path, |w| {
         let format = match encoding {
             PlyEncoding::Ascii => "ascii",
@@ -34,6 +46,9 @@ pub fn write_frame(path: &Path, frame: &Frame, encoding: PlyEncoding) -> Result<
         write!(w, "ply\nformat {format} 1.0\ncomment written by specular\n")?;
         if let Some(scale) = frame.intensity_scale {
             writeln!(w, "comment intensity_scale {}", scale.name())?;
+        }
+        if let Some(name) = sensor {
+            writeln!(w, "comment sensor {name}")?;
         }
         write!(
             w,

@@ -40,7 +40,7 @@ pub(super) fn detect_frames(
     let reading = sequence.stream_all(
         "detect",
         |k, frame| {
-            check_points(sequence, k, frame)?;
+            check_points(sequence, k, frame, sensor)?;
             let mut t = StageTimings::default();
             let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
             let start = Instant::now();

@@ -38,6 +38,7 @@ pub(super) fn fuse(
     summaries: &[FrameSummary],
     poses: &[Isometry3<f64>],
     config: &Config,
+    sensor: &SensorModel,
     timings: &mut StageTimings,
 ) -> FusedMap {
     let start = Instant::now();
@@ -61,7 +62,7 @@ pub(super) fn fuse(
     for landmark in &mut map.landmarks {
         landmark.transform(&to_world);
     }
-    let used = map.reliable(poses, &config.map.selection());
+    let used = map.reliable(poses, &config.map.selection().for_sensor(sensor));
     let planes: Vec<BoundedPlane> = used.iter().map(|&i| map.landmarks[i].bounded()).collect();
     timings.add("map", start.elapsed());
     tracing::info!(

@@ -126,7 +126,7 @@ pub fn run_plane_optimized_into(
 
     // 2-3. Fuse them into the map in timestamp order; keep the landmarks
     //      observed often enough.
-    let mut fused = fuse::fuse(&frames, poses, config, &mut timings);
+    let mut fused = fuse::fuse(&frames, poses, config, &sensor, &mut timings);
 
     // Bound each kept landmark: its hull, or the transparency evidence of
     // all frames and the panes found in it.

@@ -389,7 +389,7 @@ impl SceneFile {
 
 impl SensorFile {
     pub(super) fn build(&self, origin: &Path) -> BuildResult<SensorSetup> {
-        let model = if SensorModel::builtin_names().contains(&self.model.as_str()) {
+        let model = if SensorModel::is_builtin(&self.model) {
             SensorModel::resolve(&self.model)
         } else {
             let base = origin.parent().unwrap_or(Path::new("."));

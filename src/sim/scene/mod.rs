@@ -157,6 +157,38 @@ impl Scene {
         )))
     }
 
+    /// The text of a built-in scene or a scene file, and the origin it is
+    /// parsed with.
+    pub fn text_of(name_or_path: &str) -> Result<(String, PathBuf)> {
+        if let Some(text) = super::builtin::text(name_or_path) {
+            return Ok((
+                text.to_string(),
+                PathBuf::from(format!("builtin:{name_or_path}")),
+            ));
+        }
+        let path = Path::new(name_or_path);
+        if path.exists() {
+            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            return Ok((text, path.to_path_buf()));
+        }
+        Self::resolve(name_or_path).map(|_| (String::new(), PathBuf::new()))
+    }
+
+    /// The scene of the file `text` with its sensor model replaced by
+    /// `sensor` (a built-in name or a sensor file), and the scene file as
+    /// changed; the rest of `[sensor]` (noise, range cap, crop, blind
+    /// sector) stays the scene's.
+    pub fn with_sensor(text: &str, origin: &Path, sensor: &str) -> Result<(Self, String)> {
+        let mut file: file::SceneFile =
+            toml::from_str(text).map_err(|e| Error::format(origin, e.to_string().trim_end()))?;
+        file.sensor.model = match SensorModel::is_builtin(sensor) {
+            true => SensorModel::resolve(sensor)?.name,
+            false => sensor.to_string(),
+        };
+        let toml = toml::to_string(&file).map_err(|e| Error::format(origin, e.to_string()))?;
+        Ok((Self::from_file(file, origin)?, toml))
+    }
+
     /// Parse and validate a scene (`origin` names it in errors and anchors
     /// relative sensor paths).
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
