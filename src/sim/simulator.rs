@@ -237,6 +237,7 @@ impl Simulator {
                     ring,
                     ret,
                     label: label_of(e, r),
+                    time: 0.0,
                 });
                 truth.push(PointTruth {
                     surface: e.surface,

@@ -119,8 +119,10 @@ pub(super) fn store_int(
             }
         }
         Slot::Return => {
-            if v == 1.0 || v == 2.0 {
-                p.ret = v as u8;
+            // 3: the Livox Avia's third echo (3DRef's Livox frames hold up
+            // to three returns), a later echo of the beam: read as the last.
+            if v == 1.0 || v == 2.0 || v == 3.0 {
+                p.ret = (v as u8).min(2);
                 return Ok(());
             }
         }
@@ -141,7 +143,7 @@ pub(super) fn store_int(
 fn bad_int(slot: Slot, v: f64, loc: Loc) -> String {
     match slot {
         Slot::Ring => format!("{loc}: ring must be an integer in 0..=65535, got {v}"),
-        Slot::Return => format!("{loc}: return must be 1 or 2, got {v}"),
+        Slot::Return => format!("{loc}: return must be 1, 2 or 3, got {v}"),
         _ => format!("{loc}: label must be an integer in 0..=6, got {v}"),
     }
 }
