@@ -6,9 +6,22 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use super::pointcloud2::{decode, Decoded, Driver, POINTCLOUD2};
-use super::ros2_bag::BagOptions;
 use crate::cloud::{Frame, SetAside};
 use crate::{Error, Result};
+
+/// How a bag's point clouds are read: the driver whose layout they have
+/// and, for the Ouster driver, the topic of the second return.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct BagOptions {
+    /// The layout; `None` detects it from the first message's fields
+    /// ([`Driver::detect`]). A message without the fields the named layout
+    /// needs is an error naming the file, the topic and the fields.
+    pub driver: Option<Driver>,
+    /// The Ouster driver's second-return topic; `None` is the driver's own
+    /// convention, the first topic with `2` appended (`/ouster/points` and
+    /// `/ouster/points2`). Only the Ouster layout reads it.
+    pub second_topic: Option<String>,
+}
 
 /// A second-topic message kept undecoded until the first topic's layout
 /// is known: the file it came from, its bag time and its bytes.

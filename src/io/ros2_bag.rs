@@ -24,6 +24,7 @@ use std::borrow::Cow;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
+pub use super::bag_topics::BagOptions;
 use super::bag_topics::TopicFrames;
 use super::dataset::{Dataset, InMemory};
 use super::frames::FrameEntry;
@@ -41,20 +42,6 @@ pub(crate) const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 pub(crate) const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 /// The first bytes of a zstd frame (rosbag2's `--compression-mode file`).
 const ZSTD_MAGIC: &[u8] = &[0x28, 0xb5, 0x2f, 0xfd];
-
-/// How a bag's point clouds are read: the driver whose layout they have
-/// and, for the Ouster driver, the topic of the second return.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct BagOptions {
-    /// The layout; `None` detects it from the first message's fields
-    /// ([`Driver::detect`]). A message without the fields the named layout
-    /// needs is an error naming the file, the topic and the fields.
-    pub driver: Option<Driver>,
-    /// The Ouster driver's second-return topic; `None` is the driver's own
-    /// convention, the first topic with `2` appended (`/ouster/points` and
-    /// `/ouster/points2`). Only the Ouster layout reads it.
-    pub second_topic: Option<String>,
-}
 
 /// Every `PointCloud2` message on `topic` of the bag at `path`, as frames in
 /// timestamp order. `path` is a rosbag2 directory (or its `metadata.yaml`),
