@@ -18,13 +18,16 @@ use specular::sim::{LabelRule, SceneSource};
 pub struct InputArgs {
     /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
     /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, poses
-    /// from `hesai_pose.txt` unless a pose file is given).
+    /// from `hesai_pose.txt` unless a pose file is given) or one of its
+    /// sensor folders (`raw/seqN/raycast/ouster` or `.../livox`, poses
+    /// from `raw/seqN/ouster_pose.txt` or `livox_pose.txt`).
     #[arg(long, required_unless_present_any = ["bag", "scene", "family"])]
     pub frames: Option<PathBuf>,
     /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), instead of
     /// `--frames`: a rosbag2 directory (`metadata.yaml` with mcap or sqlite3
     /// storage; split files are read in order), an `.mcap` file or a `.db3`
-    /// file. Frames are named by their header stamp in seconds.
+    /// file. Frames are named by their header stamp in seconds; the
+    /// fields are read as `--driver` says (default: detected).
     #[arg(long, conflicts_with_all = ["frames", "scene", "family"], requires = "topic")]
     pub bag: Option<PathBuf>,
     /// The bag's point-cloud topic (for the Ouster driver, the first

@@ -146,6 +146,9 @@ pub trait FieldMapping: Sync {
 /// (seconds) to seconds after the stamp.
 type TimeOf = fn(f64, f64) -> f64;
 
+/// A return conversion: the raw field value to specular's return index.
+type ReturnOf = fn(f64) -> u8;
+
 /// Which field feeds which part of a [`Point`], resolved once per cloud;
 /// reading a record allocates nothing.
 #[derive(Debug, Clone, Copy)]
@@ -154,7 +157,7 @@ pub struct PointReader {
     intensity: Option<Field>,
     ring: Option<Field>,
     label: Option<Field>,
-    ret: Option<(Field, fn(f64) -> u8)>,
+    ret: Option<(Field, ReturnOf)>,
     time: Option<(Field, TimeOf)>,
 }
 
@@ -246,7 +249,7 @@ impl FieldMapping for GenericLayout {
     fn reader(&self, cloud: &Cloud) -> PointReader {
         let mut r = PointReader::base(cloud);
         let ret = cloud.field("return").or_else(|| cloud.field("ret"));
-        r.ret = ret.map(|f| (f, (|v| v as u8) as fn(f64) -> u8));
+        r.ret = ret.map(|f| (f, (|v| v as u8) as ReturnOf));
         let time = ["t", "time", "timestamp"]
             .into_iter()
             .find_map(|n| cloud.field(n));
@@ -340,9 +343,7 @@ impl FieldMapping for LivoxLayout {
     fn reader(&self, cloud: &Cloud) -> PointReader {
         let mut r = PointReader::base(cloud);
         r.ring = cloud.field("line");
-        r.ret = cloud
-            .field("tag")
-            .map(|f| (f, livox_return as fn(f64) -> u8));
+        r.ret = cloud.field("tag").map(|f| (f, livox_return as ReturnOf));
         r.time = cloud.field("timestamp").map(|f| (f, from_ns as TimeOf));
         r
     }
@@ -431,7 +432,7 @@ impl FieldMapping for NebulaLayout {
         r.ring = cloud.field("channel");
         r.ret = cloud
             .field("return_type")
-            .map(|f| (f, nebula_return as fn(f64) -> u8));
+            .map(|f| (f, nebula_return as ReturnOf));
         r.time = cloud
             .field("time_stamp")
             .map(|f| (f, (|v, _| v * 1e-9) as TimeOf));
