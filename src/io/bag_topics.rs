@@ -227,7 +227,10 @@ impl TopicFrames {
                 continue;
             };
             let first = &mut self.frames[i];
-            if first.shape != second.shape {
+            // Organized clouds pair a beam's returns by place; unorganized
+            // ones (ouster-ros `organized: false`) drop invalid points, so
+            // their lengths differ and each return is known by its topic.
+            if first.shape.0 > 1 && first.shape != second.shape {
                 return Err(Error::format(
                     &file,
                     format!(
@@ -271,4 +274,56 @@ pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -
         path,
         format!("topic {topic} is {kind} in {encoding}, not {POINTCLOUD2} in cdr"),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::pointcloud2::RawCloud;
+
+    /// An unorganized Ouster cloud (x y z intensity t reflectivity ring, 24
+    /// bytes) of `n` points on row 3.
+    fn ouster(n: u32) -> Vec<u8> {
+        let fields = [
+            ("x", 0, 7),
+            ("y", 4, 7),
+            ("z", 8, 7),
+            ("intensity", 12, 7),
+            ("t", 16, 6),
+            ("reflectivity", 20, 4),
+            ("ring", 22, 4),
+        ];
+        let mut data = Vec::new();
+        for i in 0..n {
+            for v in [1.0 + i as f32, 0.5, 0.25, 9.0] {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+            data.extend_from_slice(&[0, 0, 0, 0, 0, 0, 3, 0]);
+        }
+        let cloud = RawCloud {
+            sec: 5,
+            nanosec: 0,
+            frame_id: "os_lidar",
+            height: 1,
+            width: n,
+            fields: &fields,
+            point_step: 24,
+            data: &data,
+            is_dense: true,
+        };
+        cloud.encode()
+    }
+
+    #[test]
+    fn unorganized_ouster_returns_are_paired_by_stamp_alone() {
+        let path = Path::new("bag.mcap");
+        let mut frames = TopicFrames::new("/ouster/points");
+        frames.push(path, "/ouster/points", 0, &ouster(3)).unwrap();
+        frames.push(path, "/ouster/points2", 0, &ouster(2)).unwrap();
+        let out = frames.finish(path).unwrap();
+        let rets: Vec<u8> = out[0].points.iter().map(|p| p.ret).collect();
+        assert_eq!(rets, [1, 1, 1, 2, 2]);
+        // Row 3 of at least 16 rows, counted from the bottom.
+        assert!(out[0].points.iter().all(|p| p.ring == 12));
+    }
 }
