@@ -16,6 +16,14 @@ pub struct Point {
     pub ret: u8,
     /// 3DRef label id (0 when the file carries no labels).
     pub label: u8,
+    /// When the point was measured: seconds after the frame's
+    /// [`stamp`](Frame::stamp) (negative when before it), as a bag's
+    /// per-point time field gives it (Ouster `t`, Hesai and Livox
+    /// `timestamp`, nebula `time_stamp`, or a generic `t`/`time`/`timestamp`;
+    /// see [`crate::io::pointcloud2::drivers`]). 0 when the source has no
+    /// per-point time (3DRef PLY frames, the instantaneous simulator): the
+    /// whole frame is taken at its stamp. Deskewing reads it.
+    pub time: f32,
 }
 
 impl Point {
@@ -245,5 +253,6 @@ pub(crate) fn test_point(x: f32, y: f32, z: f32, ring: u16, ret: u8) -> Point {
         ring,
         ret,
         label: 1,
+        time: 0.0,
     }
 }

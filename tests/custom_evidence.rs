@@ -53,6 +53,7 @@ fn classify(weighing: Weighing, intensities: &[f32]) -> (Vec<Class>, Vec<Rule>, 
                     ring: sensor.ring_of(&p).unwrap_or(0) as u16,
                     ret: 1,
                     label: 0,
+                    time: 0.0,
                 }
             })
             .collect(),

@@ -40,6 +40,7 @@ fn small_frame() -> Frame {
                 ring: i % 64,
                 ret: 1 + (i % 2) as u8,
                 label: [1u8, 2, 5, 6][i as usize % 4],
+                time: 0.0,
             })
             .collect(),
         has_labels: true,

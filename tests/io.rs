@@ -34,6 +34,7 @@ fn sample_frame(has_labels: bool) -> Frame {
                 ring: (i % 64) as u16,
                 ret: 1 + (i % 2) as u8,
                 label: if has_labels { (i % 7) as u8 } else { 0 },
+                time: 0.0,
             }
         })
         .collect();
@@ -209,7 +210,8 @@ fn ply_other_types_elements_and_crlf() {
             intensity: 200.0,
             ring: 7,
             ret: 2,
-            label: 0
+            label: 0,
+            time: 0.0,
         }
     );
     assert_eq!(f.points[1].xyz, [-0.0, 0.5, 100.0]);
@@ -244,7 +246,8 @@ fn binary_with_doubles_and_extra_element() {
             intensity: 17.0,
             ring: 62,
             ret: 2,
-            label: 6
+            label: 6,
+            time: 0.0,
         }
     );
     // One byte short: truncated.
@@ -274,7 +277,8 @@ fn real_frame() {
             intensity: 14.0,
             ring: 36,
             ret: 1,
-            label: 4
+            label: 4,
+            time: 0.0,
         }
     );
     // Binary round trip of real data.

@@ -133,6 +133,7 @@ fn mirror_frame(sensor: &SensorModel, lo: &Point3<f64>, hi: &Point3<f64>) -> Fra
             ring: ring as u16,
             ret,
             label,
+            time: 0.0,
         })
     };
     for ring in 0..sensor.rings() {

@@ -391,6 +391,7 @@ mod tests {
                 ring: 0,
                 ret: 1,
                 label: 1,
+                time: 0.0,
             })
             .collect();
         let frame = Frame {

@@ -133,6 +133,8 @@ pub fn run(args: DemoArgs) -> Result<()> {
         frames: Some(sample.join("frames")),
         bag: None,
         topic: None,
+        driver: None,
+        second_topic: None,
         scene: None,
         family: None,
         scene_frames: None,

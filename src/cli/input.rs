@@ -19,18 +19,35 @@ use specular::sim::{LabelRule, SceneSource};
 pub struct InputArgs {
     /// Directory of 3DRef frames (`<timestamp>.ply`), or a 3DRef release
     /// sequence directory (`raw/seqN`: frames in `raycast/hesai/`, poses
-    /// from `hesai_pose.txt` unless a pose file is given).
+    /// from `hesai_pose.txt` unless a pose file is given) or one of its
+    /// sensor folders (`raw/seqN/raycast/ouster` or `.../livox`, poses
+    /// from `raw/seqN/ouster_pose.txt` or `livox_pose.txt`).
     #[arg(long, required_unless_present_any = ["bag", "scene", "family"])]
     pub frames: Option<PathBuf>,
     /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), instead of
     /// `--frames`: a rosbag2 directory (`metadata.yaml` with mcap or sqlite3
     /// storage; split files are read in order), an `.mcap` file or a `.db3`
-    /// file. Frames are named by their header stamp in seconds.
+    /// file. Frames are named by their header stamp in seconds; the
+    /// fields are read as `--driver` says (default: detected).
     #[arg(long, conflicts_with_all = ["frames", "scene", "family"], requires = "topic")]
     pub bag: Option<PathBuf>,
-    /// The bag's point-cloud topic.
+    /// The bag's point-cloud topic (for the Ouster driver, the first
+    /// return's: `/ouster/points`).
     #[arg(long, requires = "bag", conflicts_with = "frames")]
     pub topic: Option<String>,
+    /// The driver that wrote the bag, whose field layout is read (default:
+    /// detected from the fields): generic (a `return` field), ouster
+    /// (ouster-ros: second return on its own topic), livox
+    /// (livox_ros_driver2: return in `tag` bits), hesai
+    /// (HesaiLidar_ROS_2.0: both returns in one cloud, paired by order)
+    /// or nebula (`return_type`). A bag without the named layout's fields
+    /// is an error naming the fields it lacks.
+    #[arg(long, value_enum, requires = "bag")]
+    pub driver: Option<DriverArg>,
+    /// The Ouster driver's second-return topic (default: the topic with
+    /// `2` appended, `/ouster/points2`).
+    #[arg(long, requires = "bag")]
+    pub second_topic: Option<String>,
     /// A simulated scene instead of recorded frames: a built-in name
     /// (office, lobby, corridor, mirror-room, glass-loop, ...) or a scene
     /// TOML file. Frames are made as they are read, nothing is written;
@@ -62,6 +79,34 @@ pub struct InputArgs {
     /// frames whose header names another sensor are refused).
     #[arg(long)]
     pub sensor: Option<String>,
+}
+
+/// The bag layouts on the command line (`--driver`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DriverArg {
+    /// specular's own layout: a `return` (or `ret`) field.
+    Generic,
+    /// ouster-ros: `x y z intensity t reflectivity ring ambient range`,
+    /// return 2 on a second topic.
+    Ouster,
+    /// livox_ros_driver2: `x y z intensity tag line timestamp`.
+    Livox,
+    /// HesaiLidar_ROS_2.0: `x y z intensity ring timestamp`.
+    Hesai,
+    /// tier4 nebula: `x y z intensity return_type channel ... time_stamp`.
+    Nebula,
+}
+
+impl From<DriverArg> for io::Driver {
+    fn from(d: DriverArg) -> Self {
+        match d {
+            DriverArg::Generic => io::Driver::Generic,
+            DriverArg::Ouster => io::Driver::Ouster,
+            DriverArg::Livox => io::Driver::Livox,
+            DriverArg::Hesai => io::Driver::Hesai,
+            DriverArg::Nebula => io::Driver::Nebula,
+        }
+    }
 }
 
 /// The label rule of simulated frames on the command line.
@@ -157,6 +202,10 @@ impl InputArgs {
             (None, Some(bag)) => DatasetSource::Bag {
                 path: bag.clone(),
                 topic: self.topic.clone().unwrap_or_default(),
+                options: io::BagOptions {
+                    driver: self.driver.map(Into::into),
+                    second_topic: self.second_topic.clone(),
+                },
             },
             (None, None) => match self.simulated() {
                 Some(scene) => DatasetSource::Simulated {

@@ -299,6 +299,7 @@ pub(crate) mod testing {
                         ring: ring as u16,
                         ret: 1,
                         label: 1,
+                        time: 0.0,
                     });
                 }
             }

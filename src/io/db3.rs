@@ -5,7 +5,7 @@
 //! `topics(id, name, type, serialization_format, ...)` and
 //! `messages(id, topic_id, timestamp, data)`; `data` is the CDR-serialized
 //! message exactly as in MCAP, so the frames come from the same
-//! [`decode_pointcloud2`](super::ros2_bag::decode_pointcloud2). The file is
+//! [`decode`](super::pointcloud2::decode). The file is
 //! opened read-only; SQLite is compiled into specular (rusqlite's `bundled`
 //! feature), so no system library is needed.
 
@@ -15,7 +15,8 @@ use std::path::Path;
 
 use rusqlite::{Connection, OpenFlags};
 
-use super::ros2_bag::{TopicFrames, SQLITE_MAGIC};
+use super::bag_topics::TopicFrames;
+use super::ros2_bag::SQLITE_MAGIC;
 use crate::{Error, Result};
 
 /// Gather the messages of one `.db3` file (a bag of its own, or one file of
@@ -64,13 +65,13 @@ pub fn read_db3(path: &Path, frames: &mut TopicFrames) -> Result<()> {
         let n = counts.get(id).copied().unwrap_or(0).max(0) as usize;
         frames.note(path, name, kind, encoding, n)?;
         if frames.wants(name) {
-            wanted.push(*id);
+            wanted.push((*id, name.as_str()));
         }
     }
     let mut query = db
         .prepare("SELECT timestamp, data FROM messages WHERE topic_id = ?1 ORDER BY timestamp, id")
         .map_err(sql)?;
-    for id in wanted {
+    for (id, name) in wanted {
         let mut rows = query.query([id]).map_err(sql)?;
         while let Some(row) = rows.next().map_err(sql)? {
             let time: i64 = row.get(0).map_err(sql)?;
@@ -81,7 +82,7 @@ pub fn read_db3(path: &Path, frames: &mut TopicFrames) -> Result<()> {
                     format!("message at {time} ns: data is not a blob: {e}"),
                 )
             })?;
-            frames.push(path, time, data)?;
+            frames.push(path, name, time, data)?;
         }
     }
     Ok(())
@@ -104,6 +105,7 @@ mod tests {
                     ring: i as u16,
                     ret: 1,
                     label: 1,
+                    time: 0.0,
                 })
                 .collect(),
             has_labels: true,

@@ -34,23 +34,48 @@ pub fn parse_stamp(path: &Path) -> Result<(String, f64)> {
     Ok((stem.to_string(), stamp))
 }
 
-/// The directory holding a sequence's frames: `dir` itself, or, for the
-/// 3DRef release layout (`raw/seqN/` with the frames in
-/// `raw/seqN/raycast/hesai/`), that subdirectory, read in place.
-pub fn frame_dir(dir: &Path) -> PathBuf {
-    let release = dir.join("raycast").join("hesai");
-    if release.is_dir() {
-        release
-    } else {
-        dir.to_path_buf()
+/// The sensor folders of the 3DRef release, in the order a sequence
+/// directory's is chosen: `raw/seqN/raycast/<sensor>/` holds a sensor's
+/// frames and `raw/seqN/<sensor>_pose.txt` its poses. The labelling script
+/// writes every sensor's frames with one writer (ascii float `x y z nx ny
+/// nz intensity ring return label`), so all three are read alike.
+pub const RELEASE_SENSORS: [&str; 3] = ["hesai", "ouster", "livox"];
+
+/// The release sensor folder `dir` is or holds: `(frames, sequence
+/// directory, sensor)`. `dir` is a sequence directory (`raw/seqN`, whose
+/// first sensor folder in [`RELEASE_SENSORS`] order is taken) or a sensor
+/// folder itself (`raw/seqN/raycast/ouster`).
+fn release_folder(dir: &Path) -> Option<(PathBuf, PathBuf, &'static str)> {
+    for sensor in RELEASE_SENSORS {
+        let frames = dir.join("raycast").join(sensor);
+        if frames.is_dir() {
+            return Some((frames, dir.to_path_buf(), sensor));
+        }
     }
+    let name = dir.file_name()?.to_str()?;
+    let sensor = RELEASE_SENSORS.into_iter().find(|s| *s == name)?;
+    let raycast = dir
+        .parent()
+        .filter(|p| p.file_name().is_some_and(|n| n == "raycast"))?;
+    Some((dir.to_path_buf(), raycast.parent()?.to_path_buf(), sensor))
 }
 
-/// The pose file of the 3DRef release layout (`raw/seqN/hesai_pose.txt`)
-/// when `dir` is such a sequence directory and the file exists.
+/// The directory holding a sequence's frames: `dir` itself, or, for the
+/// 3DRef release layout (`raw/seqN/` with the frames in
+/// `raw/seqN/raycast/{hesai,ouster,livox}/`), the first sensor folder
+/// there ([`RELEASE_SENSORS`]), read in place. Give the sensor folder
+/// itself (`raw/seqN/raycast/ouster`) to read another sensor.
+pub fn frame_dir(dir: &Path) -> PathBuf {
+    release_folder(dir).map_or_else(|| dir.to_path_buf(), |(frames, _, _)| frames)
+}
+
+/// The pose file of the 3DRef release layout (`raw/seqN/<sensor>_pose.txt`
+/// for the sensor folder [`frame_dir`] reads) when `dir` is a sequence
+/// directory or one of its sensor folders and the file exists.
 pub fn release_poses(dir: &Path) -> Option<PathBuf> {
-    let poses = dir.join("hesai_pose.txt");
-    (dir.join("raycast").join("hesai").is_dir() && poses.is_file()).then_some(poses)
+    let (_, seq, sensor) = release_folder(dir)?;
+    let poses = seq.join(format!("{sensor}_pose.txt"));
+    poses.is_file().then_some(poses)
 }
 
 /// All `*.ply` frames in `dir`, sorted by timestamp. Errors when the

@@ -10,7 +10,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::ros2_bag::{TopicFrames, MCAP_MAGIC};
+use super::bag_topics::TopicFrames;
+use super::ros2_bag::MCAP_MAGIC;
 use crate::{Error, Result};
 
 /// Gather the messages of an MCAP file (one file of a bag, or a bag of
@@ -64,7 +65,7 @@ pub fn read_mcap(path: &Path, frames: &mut TopicFrames) -> Result<()> {
                         let kind = schemas.get(schema).map_or("schemaless", String::as_str);
                         frames.note(path, topic, kind, encoding, 1)?;
                         if frames.wants(topic) {
-                            frames.push(path, header.log_time as i64, &data)?;
+                            frames.push(path, topic, header.log_time as i64, &data)?;
                         }
                     }
                     _ => {}

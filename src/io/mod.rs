@@ -8,6 +8,7 @@
 //! failed run never leaves a half-written output.
 
 pub mod atomic;
+pub mod bag_topics;
 pub mod dataset;
 pub mod db3;
 pub mod frames;
@@ -17,6 +18,7 @@ pub mod map_ply;
 pub mod mcap_file;
 pub mod planes;
 pub mod ply;
+pub mod pointcloud2;
 pub mod prob;
 pub mod ros2_bag;
 pub mod rosbag2;
@@ -37,5 +39,5 @@ pub use ply::{
     write_frame, write_frame_of, PlyEncoding,
 };
 pub use prob::{read_probs, read_probs_for, write_probs};
-pub use ros2_bag::{read_bag_frames, BagKind, Ros2Bag};
+pub use ros2_bag::{read_bag_frames, read_bag_frames_with, BagKind, BagOptions, Driver, Ros2Bag};
 pub use tum::{parse_tum, read_tum, write_tum, StampedPose};

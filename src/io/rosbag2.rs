@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use super::bag_topics::{check_type, TopicFrames};
 use super::mcap_file::read_mcap;
-use super::ros2_bag::{check_type, TopicFrames};
 use crate::cloud::Frame;
 use crate::{Error, Result};
 

@@ -84,6 +84,7 @@ mod tests {
                 ring: ring as u16,
                 ret,
                 label: 0,
+                time: 0.0,
             })
         };
         for ring in 0..sensor.rings() {

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use crate::classify::{Classifier, PlaneMapClassifier, SingleScanClassifier};
 use crate::config::Config;
 use crate::frontend::{ExtractorName, PlaneExtractor, RegionGrowingExtractor};
-use crate::io::{Dataset, PlyDir, Ros2Bag};
+use crate::io::{BagOptions, Dataset, PlyDir, Ros2Bag};
 use crate::map::{MapMerger, MergerName, WeightedAverageMerger};
 use crate::reflect::{CandidateRansacDetector, ReflectiveDetector};
 use crate::registration::{AcceptAll, GroundTripleRansac, MismatchRejector, RejectorName};
@@ -28,6 +28,8 @@ pub enum DatasetSource {
         path: PathBuf,
         /// The point-cloud topic.
         topic: String,
+        /// The drivers' layout and Ouster's second-return topic.
+        options: BagOptions,
     },
     /// A simulated scene, made frame by frame ([`SimDataset`]).
     Simulated {
@@ -50,7 +52,11 @@ pub enum DatasetSource {
 pub fn dataset(source: &DatasetSource) -> Result<Arc<dyn Dataset>> {
     Ok(match source {
         DatasetSource::Frames(dir) => Arc::new(PlyDir::open(dir)?),
-        DatasetSource::Bag { path, topic } => Arc::new(Ros2Bag::open(path, topic)?),
+        DatasetSource::Bag {
+            path,
+            topic,
+            options,
+        } => Arc::new(Ros2Bag::open_with(path, topic, options)?),
         DatasetSource::Simulated {
             scene,
             frames,

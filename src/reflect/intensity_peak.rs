@@ -147,6 +147,7 @@ mod tests {
                     ring: ring as u16,
                     ret: 1,
                     label: 2,
+                    time: 0.0,
                 });
             }
         }

@@ -352,6 +352,7 @@ mod tests {
                     ring: ring as u16,
                     ret: 1,
                     label: 1,
+                    time: 0.0,
                 });
             }
         }

@@ -296,6 +296,7 @@ impl Simulator {
                     ring,
                     ret,
                     label: label_of(e, r),
+                    time: 0.0,
                 });
                 truth.push(PointTruth {
                     surface: e.surface,

@@ -156,6 +156,7 @@ fn parse_compact(records: &[u8]) -> Option<Vec<Point>> {
                 ring: u16::from_le_bytes([r[16], r[17]]),
                 ret,
                 label,
+                time: 0.0,
             }
         })
         .collect();

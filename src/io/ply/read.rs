@@ -103,6 +103,7 @@ mod tests {
                 ring: 7 + i as u16,
                 ret: 1 + i % 2,
                 label: i + 1,
+                time: 0.0,
             })
             .collect();
         let header = |format: &str| {

@@ -24,6 +24,7 @@ fn pane_frame(sensor: &crate::sensor::SensorModel) -> Frame {
                     ring: ring as u16,
                     ret,
                     label: 0,
+                    time: 0.0,
                 });
             }
         }

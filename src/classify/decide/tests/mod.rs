@@ -46,6 +46,7 @@ pub(crate) fn frame(points: &[[f32; 3]], intensity: f32) -> Frame {
                     .unwrap_or(0) as u16,
                 ret: 1,
                 label: 0,
+                time: 0.0,
             })
             .collect(),
         ..Frame::default()
