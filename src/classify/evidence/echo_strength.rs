@@ -18,9 +18,25 @@ pub struct EchoStrength {
     /// dark or distant object behind glass): caps the weight towards a
     /// reflection.
     pub weak_error: f64,
-    /// Probability that a reflection falls deep in the transmitted group (a
-    /// bright surface reflected): caps the weight towards real.
-    pub strong_error: f64,
+    /// Share of a landmark's echoes that fall outside their own group
+    /// where both groups are fitted to its echoes (a surface darker or
+    /// brighter than the rest, a bright surface reflected): an echo then
+    /// weighs at most about `ln(1 / fitted_error)` either way.
+    pub fitted_error: f64,
+}
+
+/// The strengths an outlier of a fitted group may take, spread evenly over
+/// this many decades (about the span of echo strengths a sensor reports).
+const OUTLIER_SPAN: f64 = 4.0;
+
+impl EchoStrength {
+    /// The density of strength `s` in a fitted group `(mean, spread)`,
+    /// with its outliers ([`fitted_error`](Self::fitted_error)).
+    fn fitted_density(&self, s: f64, (mean, spread): (f64, f64)) -> f64 {
+        let z = (s - mean) / spread;
+        let gauss = (-0.5 * z * z).exp() / (spread * (2.0 * std::f64::consts::PI).sqrt());
+        (1.0 - self.fitted_error) * gauss + self.fitted_error / OUTLIER_SPAN
+    }
 }
 
 /// The least spread of the echo strengths within one group, decades: the
@@ -58,17 +74,17 @@ impl EvidenceTest for EchoStrength {
         // Behind a mirror the images are as strong as the room: the
         // strengths tell glass's reflections from its transmissions only.
         let glass = 1.0 - point.landmark.mirror_probability.unwrap_or(0.0);
-        let mut llr = glass * (log_gauss(s, reflected) - log_gauss(s, transmitted));
+        // Groups fitted to this landmark's own echoes: each echo weighs by
+        // their densities, outliers of either group allowed for.
+        if !split.from_physics {
+            let density = |group| self.fitted_density(s, group);
+            return Some(glass * (density(reflected) / density(transmitted)).ln());
+        }
         // A split not fitted to this landmark's echoes cannot tell a
         // transmission from a reflection off coated glass (`R` close to
         // `T`): a strong echo is no evidence, only a weak one is.
-        if split.from_physics {
-            llr = llr.max(0.0);
-        }
-        Some(llr.clamp(
-            -outcome_weight(self.strong_error),
-            outcome_weight(self.weak_error),
-        ))
+        let llr = glass * (log_gauss(s, reflected) - log_gauss(s, transmitted));
+        Some(llr.clamp(0.0, outcome_weight(self.weak_error)))
     }
 }
 
