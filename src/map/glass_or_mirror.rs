@@ -342,7 +342,7 @@ mod tests {
 
     /// `n` confirmed transmissions, all of one strength.
     fn transmissions(n: usize) -> EchoHistogram {
-        histogram(std::iter::repeat(3.0).take(n))
+        histogram(std::iter::repeat_n(3.0, n))
     }
 
     /// A level runs on behind a landmark when enough of its confirmed
