@@ -61,7 +61,8 @@ pub struct PlaneOptimizedOutput {
 
 impl PlaneOptimizedOutput {
     /// One line per landmark whose glass-or-mirror probability was
-    /// estimated: the prior of every point behind it.
+    /// estimated, with the share of reflections behind it where the echo
+    /// strengths tell it (the prior of every point behind it).
     pub fn mirror_lines(&self) -> Vec<String> {
         self.used
             .iter()
@@ -70,8 +71,11 @@ impl PlaneOptimizedOutput {
                 let p = bp.mirror_probability?;
                 let id = self.map.landmarks.get(i).map_or(i, |l| l.id);
                 let kind = if p > 0.5 { "mirror" } else { "glass" };
+                let share = bp.reflection_share.map_or(String::new(), |r| {
+                    format!("; reflections {:.0} % of the echoes behind it", 100.0 * r)
+                });
                 Some(format!(
-                    "landmark {id}: {kind} (P(mirror) = {p:.3}, from its echoes)"
+                    "landmark {id}: {kind} (P(mirror) = {p:.3}, from its echoes{share})"
                 ))
             })
             .collect()
