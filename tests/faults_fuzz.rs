@@ -8,13 +8,15 @@
 //! An allocation beyond what the file can hold would show as the test
 //! process aborting (out of memory), a hang as the test not ending.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+mod common;
+
+use common::bags::{write_db3, write_mcap, Message};
 use proptest::prelude::*;
 use specular::backend::synthetic::{synthetic, SyntheticParams};
 use specular::cloud::{Frame, Point};
-use specular::io::ros2_bag::{encode_pointcloud2, POINTCLOUD2, POINTCLOUD2_SCHEMA};
+use specular::io::ros2_bag::encode_pointcloud2;
 use specular::io::{self, PlyEncoding, StampedPose};
 
 /// Cases per reader.
@@ -81,66 +83,32 @@ fn kitti_bytes() -> Vec<u8> {
 }
 
 /// `frames` as CDR messages on `/points`, 0.1 s apart.
-fn messages() -> Vec<(u64, Vec<u8>)> {
+fn messages() -> Vec<Message> {
     let mut f = small_frame();
     (0..2)
         .map(|k| {
             f.stamp += 0.1 * k as f64;
             f.name = format!("{:.6}", f.stamp);
-            ((f.stamp * 1e9) as u64, encode_pointcloud2(&f, "lidar"))
+            (
+                "/points",
+                (f.stamp * 1e9) as u64,
+                encode_pointcloud2(&f, "lidar"),
+            )
         })
         .collect()
 }
 
-/// An MCAP bag of two frames.
-fn mcap_bytes() -> Vec<u8> {
-    let mut buf = std::io::Cursor::new(Vec::new());
-    {
-        let mut w = mcap::Writer::new(&mut buf).unwrap();
-        let schema = w
-            .add_schema(POINTCLOUD2, "ros2msg", POINTCLOUD2_SCHEMA.as_bytes())
-            .unwrap();
-        let channel = w
-            .add_channel(schema, "/points", "cdr", &BTreeMap::new())
-            .unwrap();
-        for (k, (t, data)) in messages().into_iter().enumerate() {
-            let header = mcap::records::MessageHeader {
-                channel_id: channel,
-                sequence: k as u32,
-                log_time: t,
-                publish_time: t,
-            };
-            w.write_to_known_channel(&header, &data).unwrap();
-        }
-        w.finish().unwrap();
-    }
-    buf.into_inner()
+/// An MCAP bag of two frames (made in `dir`).
+fn mcap_bytes(dir: &Path) -> Vec<u8> {
+    let path = dir.join("made.mcap");
+    write_mcap(&path, &messages());
+    std::fs::read(path).unwrap()
 }
 
-/// A rosbag2 sqlite3 file of two frames.
+/// A rosbag2 sqlite3 file of two frames (made in `dir`).
 fn db3_bytes(dir: &Path) -> Vec<u8> {
     let path = dir.join("bag.db3");
-    let db = rusqlite::Connection::open(&path).unwrap();
-    db.execute_batch(
-        "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
-             serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
-         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,
-             timestamp INTEGER NOT NULL, data BLOB NOT NULL);",
-    )
-    .unwrap();
-    db.execute(
-        "INSERT INTO topics VALUES (1, '/points', ?1, 'cdr', '')",
-        rusqlite::params![POINTCLOUD2],
-    )
-    .unwrap();
-    for (t, data) in messages() {
-        db.execute(
-            "INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?1, ?2)",
-            rusqlite::params![t as i64, data],
-        )
-        .unwrap();
-    }
-    drop(db);
+    write_db3(&path, &messages());
     std::fs::read(path).unwrap()
 }
 
@@ -263,7 +231,7 @@ proptest! {
     #[test]
     fn damaged_mcap((cut, flips) in damages()) {
         let tmp = tempfile::tempdir().unwrap();
-        let bytes = damage(&mcap_bytes(), cut, &flips);
+        let bytes = damage(&mcap_bytes(tmp.path()), cut, &flips);
         let path = on_disk(tmp.path(), "bag.mcap", &bytes);
         match io::read_bag_frames(&path, "/points") {
             Ok(frames) => frames.iter().for_each(|f| sound_frame(f, Some(bytes.len() / 4))),
@@ -308,7 +276,7 @@ fn the_undamaged_files_parse() {
     }
     assert_eq!(io::parse_tum(&tum_bytes(tmp.path()), p).unwrap().len(), 5);
     assert_eq!(io::parse_kitti(&kitti_bytes(), p).unwrap().len(), 4);
-    let mcap = on_disk(tmp.path(), "bag.mcap", &mcap_bytes());
+    let mcap = on_disk(tmp.path(), "bag.mcap", &mcap_bytes(tmp.path()));
     assert_eq!(io::read_bag_frames(&mcap, "/points").unwrap().len(), 2);
     let db3 = on_disk(tmp.path(), "copy.db3", &db3_bytes(tmp.path()));
     assert_eq!(io::read_bag_frames(&db3, "/points").unwrap().len(), 2);
