@@ -100,12 +100,8 @@ impl OrganizedScan {
         if sensor.is_rosette() {
             return Ok(Self::build_by_emission(frame, sensor));
         }
-        let (rings, columns) = (sensor.rings(), sensor.columns);
-        let cells = rings * columns;
-        let mut first = vec![NONE; cells];
-        let mut second = vec![NONE; cells];
-        let mut cell_of_point = vec![NONE; frame.points.len()];
-        let mut collisions = 0;
+        let mut scan = Self::empty(frame, sensor);
+        let (rings, columns) = (scan.rings, scan.columns);
         // Return 1 first, so return 2 can always find its partner cell.
         for pass in [1u8, 2u8] {
             for (i, p) in frame.points.iter().enumerate() {
@@ -122,34 +118,39 @@ impl OrganizedScan {
                 }
                 let col = sensor.column_of(p.xyz[0] as f64, p.xyz[1] as f64);
                 let cell = ring * columns + col;
-                cell_of_point[i] = cell as u32;
-                let slot = if pass == 1 { &mut first } else { &mut second };
+                scan.cell_of_point[i] = cell as u32;
+                let slot = if pass == 1 {
+                    &mut scan.first
+                } else {
+                    &mut scan.second
+                };
                 if slot[cell] == NONE {
                     slot[cell] = i as u32;
                 } else {
-                    collisions += 1;
+                    scan.collisions += 1;
                 }
             }
         }
-        Ok(Self {
+        Ok(scan)
+    }
+
+    /// `sensor`'s grid with no point in it yet, sized for `frame`'s points.
+    fn empty(frame: &Frame, sensor: &SensorModel) -> Self {
+        let (rings, columns) = (sensor.rings(), sensor.columns);
+        Self {
             rings,
             columns,
-            first,
-            second,
-            cell_of_point,
-            collisions,
-        })
+            first: vec![NONE; rings * columns],
+            second: vec![NONE; rings * columns],
+            cell_of_point: vec![NONE; frame.points.len()],
+            collisions: 0,
+        }
     }
 
     /// Organize the points of a rosette sensor on its grid of directions,
     /// pairing the returns of each emission (see the type's doc).
     fn build_by_emission(frame: &Frame, sensor: &SensorModel) -> Self {
-        let (rings, columns) = (sensor.rings(), sensor.columns);
-        let cells = rings * columns;
-        let mut first = vec![NONE; cells];
-        let mut second = vec![NONE; cells];
-        let mut cell_of_point = vec![NONE; frame.points.len()];
-        let mut collisions = 0;
+        let mut scan = Self::empty(frame, sensor);
         // A later return belongs to the emission before it when it lies
         // along the same direction (within a tenth of a grid cell).
         let cell_deg = sensor.rosette.as_ref().map_or(0.5, |r| r.grid_deg);
@@ -161,11 +162,11 @@ impl OrganizedScan {
             let dir = q.coords / q.coords.norm().max(1e-12);
             if p.ret <= 1 {
                 let cell = grid_cell(sensor, &q);
-                cell_of_point[i] = cell as u32;
-                emission = (first[cell] == NONE).then_some((cell, dir));
+                scan.cell_of_point[i] = cell as u32;
+                emission = (scan.first[cell] == NONE).then_some((cell, dir));
                 match emission {
-                    Some((c, _)) => first[c] = i as u32,
-                    None => collisions += 1,
+                    Some((c, _)) => scan.first[c] = i as u32,
+                    None => scan.collisions += 1,
                 }
                 continue;
             }
@@ -173,23 +174,16 @@ impl OrganizedScan {
                 // The emission's later return, in its cell: the last one
                 // is kept.
                 Some((c, d)) if d.dot(&dir) >= same_direction => {
-                    cell_of_point[i] = c as u32;
-                    second[c] = i as u32;
+                    scan.cell_of_point[i] = c as u32;
+                    scan.second[c] = i as u32;
                 }
                 _ => {
-                    cell_of_point[i] = grid_cell(sensor, &q) as u32;
-                    collisions += 1;
+                    scan.cell_of_point[i] = grid_cell(sensor, &q) as u32;
+                    scan.collisions += 1;
                 }
             }
         }
-        Self {
-            rings,
-            columns,
-            first,
-            second,
-            cell_of_point,
-            collisions,
-        }
+        scan
     }
 
     /// Number of rings (rows).
