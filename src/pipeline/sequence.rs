@@ -10,6 +10,14 @@
 //! through its dataset. Frames the dataset lends (it holds them) are used
 //! as they are; frames it makes (parsed, simulated) are kept in a bounded
 //! cache, the first ones of the sequence, up to a budget of bytes.
+//!
+//! A frame whose points carry their times ([`Point::time`](crate::cloud::Point::time))
+//! is handed out deskewed ([`crate::slam::deskew`]) when the sequence has
+//! poses: moved to its stamp with the velocity of its poses (the motion to
+//! the next frame over their interval), so every pass, the classification
+//! included, sees the deskewed points. The cache keeps the frames as read,
+//! so new poses (the SLAM's estimate) deskew anew. Frames without times
+//! are handed out as read.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -34,6 +42,9 @@ pub struct Sequence {
     pub entries: Vec<FrameEntry>,
     /// `T_world_sensor` per frame (matched by timestamp), when known.
     pub poses: Option<Vec<Isometry3<f64>>>,
+    /// Whether frames with per-point times are deskewed with the poses
+    /// (on unless [`without_deskew`](Self::without_deskew)).
+    deskew: bool,
     /// Where the frames come from.
     dataset: Arc<dyn Dataset>,
     /// The frames the dataset made, kept between passes up to a budget.
@@ -171,6 +182,7 @@ impl Sequence {
         Self {
             entries,
             poses,
+            deskew: true,
             dataset,
             cache: Arc::new(cache),
         }
@@ -203,6 +215,35 @@ impl Sequence {
             megabytes(megabytes_kept),
         ));
         self
+    }
+
+    /// The same frames handed out as read, never deskewed with the poses
+    /// (the SLAM's tracking deskews with its own motion estimate, and must
+    /// not see true poses a simulated sequence brings).
+    pub fn without_deskew(mut self) -> Self {
+        self.deskew = false;
+        self
+    }
+
+    /// Whether frame `index` (`frame`, as read) is handed out deskewed:
+    /// it carries per-point times, the sequence has poses and deskewing
+    /// is on.
+    fn deskews(&self, frame: &Frame) -> bool {
+        self.deskew && self.poses.is_some() && crate::slam::deskew::is_timed(frame)
+    }
+
+    /// `frame` (frame `index` as read) deskewed with the velocity of the
+    /// sequence's poses when [`deskews`](Self::deskews) says so.
+    fn deskewed<'a>(&self, index: usize, frame: Cow<'a, Frame>) -> Cow<'a, Frame> {
+        if !self.deskews(&frame) {
+            return frame;
+        }
+        let Some(poses) = &self.poses else {
+            return frame;
+        };
+        let stamps: Vec<f64> = self.entries.iter().map(|e| e.stamp).collect();
+        let velocity = crate::slam::deskew::velocity_from_poses(poses, &stamps, index);
+        Cow::Owned(crate::slam::deskew::deskewed(&frame, &velocity))
     }
 
     /// Like [`open`](Self::open), then parse every frame (in parallel) and
@@ -321,8 +362,14 @@ impl Sequence {
     }
 
     /// Frame `index` and, when the dataset made it (read its file), the
-    /// time that took.
+    /// time that took; deskewed when [`deskews`](Self::deskews) says so.
     fn fetch(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
+        let (frame, read) = self.fetch_as_read(index)?;
+        Ok((self.deskewed(index, frame), read))
+    }
+
+    /// [`fetch`](Self::fetch) without deskewing: the frame as read.
+    fn fetch_as_read(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
         let cache = &self.cache;
         if let Some(frame) = cache.frames[index].get() {
             return Ok((Cow::Borrowed(frame), None));
@@ -367,7 +414,8 @@ impl Sequence {
         sensor: &SensorModel,
     ) -> Result<Cow<'_, OrganizedScan>> {
         let cache = &self.cache;
-        if cache.frames[index].get().is_none() {
+        // A deskewed frame's scan depends on the poses: never kept.
+        if cache.frames[index].get().is_none() || self.deskews(frame) {
             return OrganizedScan::build(frame, sensor).map(Cow::Owned);
         }
         let cell = &cache.scans[index];

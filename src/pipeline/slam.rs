@@ -5,7 +5,9 @@
 //! 1. Front end, per frame and in parallel (it does not depend on the
 //!    pose): organize the scan, detect the reflective planes, extract the
 //!    ground and ordinary planes from the filtered cloud
-//!    ([`frame_features`]).
+//!    ([`frame_features`]). A frame whose points carry their times is
+//!    first deskewed with tracking's velocity ([`crate::slam::deskew`]),
+//!    so its front end runs in order, just before it is tracked.
 //! 2. Tracking, in timestamp order ([`Tracker`]): predict, register to the
 //!    previous frame, register to the map, update the map, close loops
 //!    ([`track_sequence`]).
@@ -13,7 +15,9 @@
 //!    the configured [`Backend`], then the frames between keyframes placed
 //!    against the solved planes ([`optimize_tracked`]).
 //! 4. Classification: the plane-optimized pipeline run with the estimated
-//!    poses ([`classify_with_poses`]).
+//!    poses ([`classify_with_poses`]); frames with per-point times are
+//!    deskewed with the velocity of the estimated poses
+//!    ([`Sequence`]'s frames).
 
 use std::time::{Duration, Instant};
 
@@ -31,6 +35,7 @@ use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
+use crate::slam::deskew::{deskewed, is_timed};
 use crate::slam::loop_closure::merge_duplicates;
 use crate::slam::{FrameReport, LoopConstraint, PointParams, ScanSamples, Tracker, TrackingLog};
 use crate::Result;
@@ -133,6 +138,9 @@ pub fn track_sequence(
     origin: Option<Isometry3<f64>>,
 ) -> Result<Tracked> {
     let wall = Instant::now();
+    // Tracking deskews with its own motion estimate, never with the poses
+    // the sequence may bring (a simulation's true ones).
+    let sequence = &sequence.clone().without_deskew();
     let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
@@ -141,24 +149,43 @@ pub fn track_sequence(
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
     let mut second_returns = 0;
+    let features_of = |frame: &Frame| {
+        frame_features(
+            frame,
+            &sensor,
+            detector.as_ref(),
+            extractor.as_ref(),
+            &config.extractor,
+            &config.slam.points,
+            config.seed,
+        )
+    };
     // 1. The front end, a window of frames at a time in parallel (it does
     // not depend on the pose), then 2. tracking of the window in order:
-    // only a frame's planes outlive its window.
+    // only a frame's planes outlive its window. A frame whose points carry
+    // their times is deskewed first with the velocity tracking has reached
+    // (constant velocity over the sweep), so its front end runs in order.
     let reading = sequence.stream_all(
         "track",
         |k, frame| {
             check_points(sequence, k, frame, &sensor)?;
-            frame_features(
-                frame,
-                &sensor,
-                detector.as_ref(),
-                extractor.as_ref(),
-                &config.extractor,
-                &config.slam.points,
-                config.seed,
-            )
+            match is_timed(frame) {
+                true => Ok(None),
+                false => features_of(frame).map(Some),
+            }
         },
-        |_, frame, (features, t)| {
+        |_, frame, features| {
+            let (features, t) = match features {
+                Some(done) => done,
+                None => {
+                    let start = Instant::now();
+                    let straight = deskewed(frame, &tracker.velocity());
+                    let deskew = start.elapsed();
+                    let (features, mut t) = features_of(&straight)?;
+                    t.add("deskew", deskew);
+                    (features, t)
+                }
+            };
             timings.merge(&t);
             second_returns += frame.second_returns();
             let start = Instant::now();
