@@ -225,6 +225,13 @@ impl Sequence {
         self
     }
 
+    /// Whether frames with per-point times are deskewed (on unless
+    /// [`without_deskew`](Self::without_deskew)); the SLAM's tracking
+    /// follows it too.
+    pub fn deskew_enabled(&self) -> bool {
+        self.deskew
+    }
+
     /// Whether frame `index` (`frame`, as read) is handed out deskewed:
     /// it carries per-point times, the sequence has poses and deskewing
     /// is on.
@@ -389,6 +396,17 @@ impl Sequence {
         Ok((frame, Some(read)))
     }
 
+    /// Frame `index` as measured: `frame` itself (as this sequence gave
+    /// it) unless it was handed out deskewed, then the frame as read. Its
+    /// points' directions are their beams' (the grid cells of an
+    /// [`OrganizedScan`]); the points are the same, in the same order.
+    pub fn as_measured<'a>(&'a self, index: usize, frame: &'a Frame) -> Result<Cow<'a, Frame>> {
+        if !self.deskews(frame) {
+            return Ok(Cow::Borrowed(frame));
+        }
+        Ok(self.fetch_as_read(index)?.0)
+    }
+
     /// [`scan`](Self::scan), its time added to `timings` as the stage
     /// "pair" (every pass over the frames starts with it).
     pub fn timed_scan(
@@ -405,7 +423,8 @@ impl Sequence {
     }
 
     /// The organized scan of frame `index` (`frame`, as this sequence gave
-    /// it): kept with the frame when the frame is kept, so later passes do
+    /// it; its cells from the frame as measured, [`as_measured`](Self::as_measured)):
+    /// kept with the frame when the frame is kept, so later passes do
     /// not pair its returns again; built otherwise.
     pub fn scan(
         &self,
@@ -413,9 +432,12 @@ impl Sequence {
         frame: &Frame,
         sensor: &SensorModel,
     ) -> Result<Cow<'_, OrganizedScan>> {
+        // A deskewed frame's points have moved off their beams: its grid
+        // cells come from the frame as measured.
+        let measured = self.as_measured(index, frame)?;
+        let frame: &Frame = &measured;
         let cache = &self.cache;
-        // A deskewed frame's scan depends on the poses: never kept.
-        if cache.frames[index].get().is_none() || self.deskews(frame) {
+        if cache.frames[index].get().is_none() {
             return OrganizedScan::build(frame, sensor).map(Cow::Owned);
         }
         let cell = &cache.scans[index];

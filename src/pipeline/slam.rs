@@ -21,7 +21,7 @@
 
 use std::time::{Duration, Instant};
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector6};
 
 use super::plane_optimized::run_plane_optimized_into;
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
@@ -35,7 +35,7 @@ use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
-use crate::slam::deskew::{deskewed, is_timed};
+use crate::slam::deskew::{deskewed, is_timed, velocity_from_poses};
 use crate::slam::loop_closure::merge_duplicates;
 use crate::slam::{FrameReport, LoopConstraint, PointParams, ScanSamples, Tracker, TrackingLog};
 use crate::Result;
@@ -98,7 +98,33 @@ pub fn frame_features(
     points: &PointParams,
     seed: u64,
 ) -> Result<(FrameFeatures, StageTimings)> {
-    let (scan, detection, mut t) = organize_and_detect(frame, sensor, detector, seed)?;
+    frame_features_measured(
+        frame,
+        frame,
+        sensor,
+        detector,
+        extractor,
+        extractor_params,
+        points,
+        seed,
+    )
+}
+
+/// [`frame_features`] of a deskewed `frame` whose grid cells come from
+/// `measured`, the frame as measured (its points in the same order; see
+/// [`crate::slam::deskew`]).
+#[allow(clippy::too_many_arguments)]
+pub fn frame_features_measured(
+    frame: &Frame,
+    measured: &Frame,
+    sensor: &SensorModel,
+    detector: &dyn ReflectiveDetector,
+    extractor: &dyn PlaneExtractor,
+    extractor_params: &ExtractorParams,
+    points: &PointParams,
+    seed: u64,
+) -> Result<(FrameFeatures, StageTimings)> {
+    let (scan, detection, mut t) = organize_and_detect(frame, measured, sensor, detector, seed)?;
     let start = Instant::now();
     let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
     planes.extend(reflective_planes(frame, &detection, extractor_params));
@@ -132,14 +158,71 @@ pub fn run_slam(
 
 /// The front end and tracking of Reflection SLAM over `sequence` (with the
 /// sliding window when configured), without the batch back-end.
+///
+/// Frames whose points carry their times are deskewed (unless the
+/// sequence's deskewing is off, [`Sequence::without_deskew`]) in two
+/// passes: the first deskews each frame with the velocity tracking has
+/// reached (constant velocity, as KISS-ICP), which extrapolates the
+/// motion of the sweep from the frames before it; the second tracks the
+/// sequence again with every frame deskewed with the motion the first
+/// found over its own sweep (from its pose to the next one's,
+/// [`velocity_from_poses`]). A frame's sweep runs from its stamp on (the
+/// simulator's and Ouster's convention), so tracking alone can only guess
+/// its motion: where the sensor turns while it walks, the constant
+/// body-frame twist of the last interval points the translation one
+/// interval's turn off (4.5° at 45 deg/s), a bias the second pass does
+/// not have. Sequences without per-point times are tracked once, as
+/// before.
 pub fn track_sequence(
     sequence: &Sequence,
     config: &Config,
     origin: Option<Isometry3<f64>>,
 ) -> Result<Tracked> {
+    if !sequence.deskew_enabled() {
+        return track_pass(sequence, config, origin, Deskew::Off);
+    }
+    let first = track_pass(sequence, config, origin, Deskew::Tracking)?;
+    if first.timed_frames == 0 {
+        return Ok(first);
+    }
+    let poses: Vec<Isometry3<f64>> = first.log.frames.iter().map(|f| f.pose).collect();
+    let stamps: Vec<f64> = sequence.entries.iter().map(|e| e.stamp).collect();
+    let velocities: Vec<Vector6<f64>> = (0..poses.len())
+        .map(|k| velocity_from_poses(&poses, &stamps, k))
+        .collect();
+    let mut second = track_pass(sequence, config, origin, Deskew::Given(&velocities))?;
+    // Both passes' work counts.
+    second.timings.merge_stages(&first.timings);
+    for (t, f) in second.frame_times.iter_mut().zip(&first.frame_times) {
+        *t += *f;
+    }
+    Ok(second)
+}
+
+/// Where tracking takes the velocity that deskews a frame with per-point
+/// times.
+#[derive(Clone, Copy)]
+enum Deskew<'a> {
+    /// Frames are tracked as read.
+    Off,
+    /// The velocity tracking has reached (the front end of such frames
+    /// runs in order, just before each is tracked).
+    Tracking,
+    /// One body-frame twist per second per frame.
+    Given(&'a [Vector6<f64>]),
+}
+
+/// One pass of the front end and tracking over `sequence`, frames with
+/// per-point times deskewed as `deskew` says.
+fn track_pass(
+    sequence: &Sequence,
+    config: &Config,
+    origin: Option<Isometry3<f64>>,
+    deskew: Deskew<'_>,
+) -> Result<Tracked> {
     let wall = Instant::now();
-    // Tracking deskews with its own motion estimate, never with the poses
-    // the sequence may bring (a simulation's true ones).
+    // Never deskewed with the poses the sequence may bring (a simulation's
+    // true ones): tracking deskews with its own estimate.
     let sequence = &sequence.clone().without_deskew();
     let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
@@ -149,8 +232,13 @@ pub fn track_sequence(
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
     let mut second_returns = 0;
-    let features_of = |frame: &Frame| {
-        frame_features(
+    let mut timed_frames = 0;
+    let features_of = |frame: &Frame, velocity: Option<&Vector6<f64>>| {
+        let start = Instant::now();
+        let straight = velocity.map(|v| deskewed(frame, v));
+        let took = start.elapsed();
+        let (features, mut t) = frame_features_measured(
+            straight.as_ref().unwrap_or(frame),
             frame,
             &sensor,
             detector.as_ref(),
@@ -158,34 +246,32 @@ pub fn track_sequence(
             &config.extractor,
             &config.slam.points,
             config.seed,
-        )
+        )?;
+        if straight.is_some() {
+            t.add("deskew", took);
+        }
+        Ok((features, t))
     };
     // 1. The front end, a window of frames at a time in parallel (it does
     // not depend on the pose), then 2. tracking of the window in order:
-    // only a frame's planes outlive its window. A frame whose points carry
-    // their times is deskewed first with the velocity tracking has reached
-    // (constant velocity over the sweep), so its front end runs in order.
+    // only a frame's planes outlive its window.
     let reading = sequence.stream_all(
         "track",
         |k, frame| {
             check_points(sequence, k, frame, &sensor)?;
-            match is_timed(frame) {
-                true => Ok(None),
-                false => features_of(frame).map(Some),
+            match deskew {
+                _ if !is_timed(frame) => features_of(frame, None).map(Some),
+                Deskew::Off => features_of(frame, None).map(Some),
+                Deskew::Tracking => Ok(None),
+                Deskew::Given(v) => features_of(frame, v.get(k)).map(Some),
             }
         },
         |_, frame, features| {
             let (features, t) = match features {
                 Some(done) => done,
-                None => {
-                    let start = Instant::now();
-                    let straight = deskewed(frame, &tracker.velocity());
-                    let deskew = start.elapsed();
-                    let (features, mut t) = features_of(&straight)?;
-                    t.add("deskew", deskew);
-                    (features, t)
-                }
+                None => features_of(frame, Some(&tracker.velocity()))?,
             };
+            timed_frames += usize::from(is_timed(frame));
             timings.merge(&t);
             second_returns += frame.second_returns();
             let start = Instant::now();
@@ -222,6 +308,7 @@ pub fn track_sequence(
         reports,
         frame_times,
         timings,
+        timed_frames,
     })
 }
 
@@ -254,6 +341,9 @@ pub struct Tracked {
     pub frame_times: Vec<Duration>,
     /// Time per stage.
     pub timings: StageTimings,
+    /// Frames whose points carry their times (deskewed unless the
+    /// sequence's deskewing is off).
+    pub timed_frames: usize,
 }
 
 /// Run the batch back-end of `config` on a tracking result (step 3: the
@@ -285,6 +375,7 @@ pub fn optimize_tracked_with(
         reports,
         frame_times,
         mut timings,
+        ..
     } = tracked;
     // Tracking's poses as the sliding window left them.
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();
