@@ -61,7 +61,11 @@ fn file(format: &str, time_type: &str, body: &[u8]) -> Vec<u8> {
 #[test]
 fn double_times_are_read_and_bad_times_name_the_file() {
     let path = Path::new("/data/1700000000.100000.ply");
-    let ok = file("ascii", "double", b"1 2 3 10 4 1 0.05\n2 2 3 10 5 1 -0.01\n");
+    let ok = file(
+        "ascii",
+        "double",
+        b"1 2 3 10 4 1 0.05\n2 2 3 10 5 1 -0.01\n",
+    );
     let f = parse_frame(&ok, path).unwrap();
     assert_eq!(f.points[0].time, 0.05);
     assert_eq!(f.points[1].time, -0.01);

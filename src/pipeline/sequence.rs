@@ -14,7 +14,8 @@
 //! A frame whose points carry their times ([`Point::time`](crate::cloud::Point::time))
 //! is handed out deskewed ([`crate::slam::deskew`]) when the sequence has
 //! poses: moved to its stamp with the velocity of its poses (the motion to
-//! the next frame over their interval), so every pass, the classification
+//! the next frame over their interval, averaged over the intervals around
+//! it: [`smoothed_velocity`](crate::slam::deskew::smoothed_velocity)), so every pass, the classification
 //! included, sees the deskewed points. The cache keeps the frames as read,
 //! so new poses (the SLAM's estimate) deskew anew. Frames without times
 //! are handed out as read.
@@ -248,8 +249,9 @@ impl Sequence {
         let Some(poses) = &self.poses else {
             return frame;
         };
+        use crate::slam::deskew::{smoothed_velocity, VELOCITY_HALF_WINDOW};
         let stamps: Vec<f64> = self.entries.iter().map(|e| e.stamp).collect();
-        let velocity = crate::slam::deskew::velocity_from_poses(poses, &stamps, index);
+        let velocity = smoothed_velocity(poses, &stamps, index, VELOCITY_HALF_WINDOW);
         Cow::Owned(crate::slam::deskew::deskewed(&frame, &velocity))
     }
 

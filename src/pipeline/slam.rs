@@ -34,8 +34,8 @@ use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtra
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
+use crate::slam::deskew::{deskewed, is_timed, smoothed_velocities, VELOCITY_HALF_WINDOW};
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
-use crate::slam::deskew::{deskewed, is_timed, velocity_from_poses};
 use crate::slam::loop_closure::merge_duplicates;
 use crate::slam::{FrameReport, LoopConstraint, PointParams, ScanSamples, Tracker, TrackingLog};
 use crate::Result;
@@ -165,8 +165,8 @@ pub fn run_slam(
 /// reached (constant velocity, as KISS-ICP), which extrapolates the
 /// motion of the sweep from the frames before it; the second tracks the
 /// sequence again with every frame deskewed with the motion the first
-/// found over its own sweep (from its pose to the next one's,
-/// [`velocity_from_poses`]). A frame's sweep runs from its stamp on (the
+/// found over its own sweep (from its pose to the next one's, averaged
+/// over the intervals around it, [`smoothed_velocities`]). A frame's sweep runs from its stamp on (the
 /// simulator's and Ouster's convention), so tracking alone can only guess
 /// its motion: where the sensor turns while it walks, the constant
 /// body-frame twist of the last interval points the translation one
@@ -187,9 +187,7 @@ pub fn track_sequence(
     }
     let poses: Vec<Isometry3<f64>> = first.log.frames.iter().map(|f| f.pose).collect();
     let stamps: Vec<f64> = sequence.entries.iter().map(|e| e.stamp).collect();
-    let velocities: Vec<Vector6<f64>> = (0..poses.len())
-        .map(|k| velocity_from_poses(&poses, &stamps, k))
-        .collect();
+    let velocities = smoothed_velocities(&poses, &stamps, VELOCITY_HALF_WINDOW);
     let mut second = track_pass(sequence, config, origin, Deskew::Given(&velocities))?;
     // Both passes' work counts.
     second.timings.merge_stages(&first.timings);

@@ -339,7 +339,10 @@ mod tests {
         let turned = a.rotation.angle_to(&b.rotation).to_degrees();
         // On a straight piece the path's heading is constant.
         assert!((turned - 4.5).abs() < 1e-9, "{turned}");
-        assert_eq!(square(true).pose(1.5), square(true).with_turn_rate_deg(0.0).unwrap().pose(1.5));
+        assert_eq!(
+            square(true).pose(1.5),
+            square(true).with_turn_rate_deg(0.0).unwrap().pose(1.5)
+        );
         assert!(square(true).with_turn_rate_deg(f64::NAN).is_err());
     }
 
