@@ -54,8 +54,9 @@ fn the_sweep_spreads_firing_times_over_the_period() {
 }
 
 /// Reflection SLAM on a distorted sequence: with deskewing (the default)
-/// the trajectory stays within 3 cm of the truth; without it, it drifts
-/// to more than twice that.
+/// the ATE stays under a centimetre (2.5 mm when written); without it,
+/// the ATE and the largest error are more than twice those deskewed
+/// (9.1 mm and 10.9 cm against 2.6 cm).
 #[test]
 fn deskewing_brings_the_slam_back_to_the_truth() {
     let config = Config::resolve("default").unwrap();
@@ -77,6 +78,7 @@ fn deskewing_brings_the_slam_back_to_the_truth() {
         "demo walked at 1 m/s turning at 45 deg/s, 25 frames: largest error {deskewed:.4} m \
          (ATE {ate:.4}) deskewed, {skewed:.4} m (ATE {ate_skewed:.4}) not"
     );
-    assert!(deskewed < 0.03, "{deskewed}");
+    assert!(ate < 0.01, "{ate}");
+    assert!(ate_skewed > 2.0 * ate, "{ate_skewed} vs {ate}");
     assert!(skewed > 2.0 * deskewed, "{skewed} vs {deskewed}");
 }
