@@ -1,6 +1,9 @@
 //! Motion distortion end to end (issue 40, part 3): the simulator's sweep
 //! over the sensor period, and the SLAM's deskewing of it.
 
+mod common;
+
+use common::cli::{s, specular, stderr};
 use nalgebra::Isometry3;
 use specular::config::Config;
 use specular::eval::trajectory_error;
@@ -81,4 +84,60 @@ fn deskewing_brings_the_slam_back_to_the_truth() {
     assert!(ate < 0.01, "{ate}");
     assert!(ate_skewed > 2.0 * ate, "{ate_skewed} vs {ate}");
     assert!(skewed > 2.0 * deskewed, "{skewed} vs {deskewed}");
+}
+
+/// `simulate --sweep --speed --turn-rate` writes the per-point time and
+/// records the changes in `scene.toml`; the same walk without `--sweep`
+/// writes no time and the same poses; `slam --no-deskew` runs on it.
+#[test]
+fn simulate_flags_write_times_and_the_changed_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "simulate",
+            "--scene",
+            "demo",
+            "--frames",
+            "3",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        let o = specular(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        out
+    };
+    let walk = ["--speed", "1", "--turn-rate", "45"];
+    let swept = run("swept", &[&walk[..], &["--sweep"]].concat());
+    let still = run("still", &walk);
+    let header = |dir: &std::path::Path| {
+        let bytes = std::fs::read(dir.join("frames/1700000000.100000.ply")).unwrap();
+        let end = bytes.windows(10).position(|w| w == b"end_header").unwrap();
+        String::from_utf8_lossy(&bytes[..end]).into_owned()
+    };
+    assert!(header(&swept).contains("property float time"));
+    assert!(!header(&still).contains("time"));
+    let scene = std::fs::read_to_string(swept.join("scene.toml")).unwrap();
+    assert!(
+        scene.contains("sweep = true") && scene.contains("turn_rate_deg = 45.0"),
+        "{scene}"
+    );
+    assert_eq!(
+        std::fs::read(swept.join("poses.txt")).unwrap(),
+        std::fs::read(still.join("poses.txt")).unwrap()
+    );
+    let out = dir.path().join("slam");
+    let o = specular(&[
+        "slam",
+        "--frames",
+        s(&swept.join("frames")),
+        "--gt-poses",
+        s(&swept.join("poses.txt")),
+        "--no-deskew",
+        "--no-classify",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
