@@ -20,9 +20,11 @@ pub struct Point {
     /// [`stamp`](Frame::stamp) (negative when before it), as a bag's
     /// per-point time field gives it (Ouster `t`, Hesai and Livox
     /// `timestamp`, nebula `time_stamp`, or a generic `t`/`time`/`timestamp`;
-    /// see [`crate::io::pointcloud2::drivers`]). 0 when the source has no
-    /// per-point time (3DRef PLY frames, the instantaneous simulator): the
-    /// whole frame is taken at its stamp. Deskewing reads it.
+    /// see [`crate::io::pointcloud2::drivers`]), or a PLY frame's `time`
+    /// property (the sweeping simulator writes it). 0 when the source has
+    /// no per-point time (3DRef's PLY frames, the instantaneous
+    /// simulator): the whole frame is taken at its stamp. Deskewing
+    /// ([`crate::slam::deskew`]) reads it.
     pub time: f32,
 }
 

@@ -141,6 +141,7 @@ pub fn run(args: DemoArgs) -> Result<()> {
         seed: None,
         labels: LabelsArg::Raycast3dref,
         sensor: None,
+        no_deskew: false,
     };
     let sequence = frames.open(Some(&sample.join("poses.txt")), &config)?;
     let real_dir = RunDir::claim(&real_out, true)?;

@@ -79,6 +79,12 @@ pub struct InputArgs {
     /// frames whose header names another sensor are refused).
     #[arg(long)]
     pub sensor: Option<String>,
+    /// Leave frames whose points carry their times as measured: no
+    /// deskewing (by default such a frame is moved to its stamp with the
+    /// motion estimate: `slam`'s tracking velocity, then the velocity of
+    /// the poses; `detect`'s poses). To see what deskewing does.
+    #[arg(long)]
+    pub no_deskew: bool,
 }
 
 /// The bag layouts on the command line (`--driver`).
@@ -250,6 +256,9 @@ impl InputArgs {
         }
         let mut sequence =
             Sequence::from_dataset(dataset).with_frame_cache(config.input.frame_cache_mb);
+        if self.no_deskew {
+            sequence = sequence.without_deskew();
+        }
         if let Some(path) = poses {
             let matching = config.input.pose_matching();
             sequence.poses = Some(io::read_poses_for(&sequence.entries, path, matching)?);

@@ -9,7 +9,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use specular::io::{self, PlyEncoding};
-use specular::sim::{self, family, LabelCounts, PlaneTally, SceneSource, Simulator, TruePlanes};
+use specular::sim::{
+    self, family, LabelCounts, PlaneTally, SceneChanges, SceneSource, Simulator, TruePlanes,
+};
 
 use super::input::LabelsArg;
 
@@ -61,6 +63,22 @@ pub struct SimulateArgs {
     /// simulated, so `detect` and `slam` read them as its.
     #[arg(long)]
     pub sensor: Option<String>,
+    /// Motion distortion: fire each frame's beams over the sensor's period
+    /// (`1 / rate_hz` of its model) while it moves, each point in the
+    /// sensor frame of its own firing time with its time written (PLY
+    /// property `time`, seconds after the frame's stamp). A frame's stamp
+    /// and its pose in OUT/poses.txt are its sweep's start. Off, every
+    /// beam of a frame is fired at its stamp.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Walk the scene's path at this speed, m/s, instead of its own.
+    #[arg(long)]
+    pub speed: Option<f64>,
+    /// Turn the sensor about its vertical axis at this rate, deg/s, on
+    /// top of the path's heading (e.g. `--sweep --speed 1 --turn-rate 45`:
+    /// walks at 1 m/s, turns at 45 deg/s).
+    #[arg(long)]
+    pub turn_rate: Option<f64>,
 }
 
 /// Run `simulate`.
@@ -79,7 +97,13 @@ pub fn run(args: SimulateArgs) -> Result<()> {
         },
         (None, None) => anyhow::bail!("give --scene NAME or --family NAME"),
     };
-    let (scene, scene_file) = source.resolve_for(args.sensor.as_deref())?;
+    let changes = SceneChanges {
+        sensor: args.sensor.clone(),
+        sweep: args.sweep,
+        speed: args.speed,
+        turn_rate_deg: args.turn_rate,
+    };
+    let (scene, scene_file) = source.resolve_with(&changes)?;
     // A family's seed draws its scene and its noise.
     let seed = match &source {
         SceneSource::Named(_) => args.seed.unwrap_or(scene.seed),

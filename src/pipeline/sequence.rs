@@ -10,6 +10,15 @@
 //! through its dataset. Frames the dataset lends (it holds them) are used
 //! as they are; frames it makes (parsed, simulated) are kept in a bounded
 //! cache, the first ones of the sequence, up to a budget of bytes.
+//!
+//! A frame whose points carry their times ([`Point::time`](crate::cloud::Point::time))
+//! is handed out deskewed ([`crate::slam::deskew`]) when the sequence has
+//! poses: moved to its stamp with the velocity of its poses (the motion to
+//! the next frame over their interval, averaged over the intervals around
+//! it: [`smoothed_velocity`](crate::slam::deskew::smoothed_velocity)), so every pass, the classification
+//! included, sees the deskewed points. The cache keeps the frames as read,
+//! so new poses (the SLAM's estimate) deskew anew. Frames without times
+//! are handed out as read.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -34,6 +43,9 @@ pub struct Sequence {
     pub entries: Vec<FrameEntry>,
     /// `T_world_sensor` per frame (matched by timestamp), when known.
     pub poses: Option<Vec<Isometry3<f64>>>,
+    /// Whether frames with per-point times are deskewed with the poses
+    /// (on unless [`without_deskew`](Self::without_deskew)).
+    deskew: bool,
     /// Where the frames come from.
     dataset: Arc<dyn Dataset>,
     /// The frames the dataset made, kept between passes up to a budget.
@@ -171,6 +183,7 @@ impl Sequence {
         Self {
             entries,
             poses,
+            deskew: true,
             dataset,
             cache: Arc::new(cache),
         }
@@ -203,6 +216,43 @@ impl Sequence {
             megabytes(megabytes_kept),
         ));
         self
+    }
+
+    /// The same frames handed out as read, never deskewed with the poses
+    /// (the SLAM's tracking deskews with its own motion estimate, and must
+    /// not see true poses a simulated sequence brings).
+    pub fn without_deskew(mut self) -> Self {
+        self.deskew = false;
+        self
+    }
+
+    /// Whether frames with per-point times are deskewed (on unless
+    /// [`without_deskew`](Self::without_deskew)); the SLAM's tracking
+    /// follows it too.
+    pub fn deskew_enabled(&self) -> bool {
+        self.deskew
+    }
+
+    /// Whether frame `index` (`frame`, as read) is handed out deskewed:
+    /// it carries per-point times, the sequence has poses and deskewing
+    /// is on.
+    fn deskews(&self, frame: &Frame) -> bool {
+        self.deskew && self.poses.is_some() && crate::slam::deskew::is_timed(frame)
+    }
+
+    /// `frame` (frame `index` as read) deskewed with the velocity of the
+    /// sequence's poses when [`deskews`](Self::deskews) says so.
+    fn deskewed<'a>(&self, index: usize, frame: Cow<'a, Frame>) -> Cow<'a, Frame> {
+        if !self.deskews(&frame) {
+            return frame;
+        }
+        let Some(poses) = &self.poses else {
+            return frame;
+        };
+        use crate::slam::deskew::{smoothed_velocity, VELOCITY_HALF_WINDOW};
+        let stamps: Vec<f64> = self.entries.iter().map(|e| e.stamp).collect();
+        let velocity = smoothed_velocity(poses, &stamps, index, VELOCITY_HALF_WINDOW);
+        Cow::Owned(crate::slam::deskew::deskewed(&frame, &velocity))
     }
 
     /// Like [`open`](Self::open), then parse every frame (in parallel) and
@@ -321,8 +371,14 @@ impl Sequence {
     }
 
     /// Frame `index` and, when the dataset made it (read its file), the
-    /// time that took.
+    /// time that took; deskewed when [`deskews`](Self::deskews) says so.
     fn fetch(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
+        let (frame, read) = self.fetch_as_read(index)?;
+        Ok((self.deskewed(index, frame), read))
+    }
+
+    /// [`fetch`](Self::fetch) without deskewing: the frame as read.
+    fn fetch_as_read(&self, index: usize) -> Result<(Cow<'_, Frame>, Option<Duration>)> {
         let cache = &self.cache;
         if let Some(frame) = cache.frames[index].get() {
             return Ok((Cow::Borrowed(frame), None));
@@ -342,6 +398,17 @@ impl Sequence {
         Ok((frame, Some(read)))
     }
 
+    /// Frame `index` as measured: `frame` itself (as this sequence gave
+    /// it) unless it was handed out deskewed, then the frame as read. Its
+    /// points' directions are their beams' (the grid cells of an
+    /// [`OrganizedScan`]); the points are the same, in the same order.
+    pub fn as_measured<'a>(&'a self, index: usize, frame: &'a Frame) -> Result<Cow<'a, Frame>> {
+        if !self.deskews(frame) {
+            return Ok(Cow::Borrowed(frame));
+        }
+        Ok(self.fetch_as_read(index)?.0)
+    }
+
     /// [`scan`](Self::scan), its time added to `timings` as the stage
     /// "pair" (every pass over the frames starts with it).
     pub fn timed_scan(
@@ -358,7 +425,8 @@ impl Sequence {
     }
 
     /// The organized scan of frame `index` (`frame`, as this sequence gave
-    /// it): kept with the frame when the frame is kept, so later passes do
+    /// it; its cells from the frame as measured, [`as_measured`](Self::as_measured)):
+    /// kept with the frame when the frame is kept, so later passes do
     /// not pair its returns again; built otherwise.
     pub fn scan(
         &self,
@@ -366,6 +434,10 @@ impl Sequence {
         frame: &Frame,
         sensor: &SensorModel,
     ) -> Result<Cow<'_, OrganizedScan>> {
+        // A deskewed frame's points have moved off their beams: its grid
+        // cells come from the frame as measured.
+        let measured = self.as_measured(index, frame)?;
+        let frame: &Frame = &measured;
         let cache = &self.cache;
         if cache.frames[index].get().is_none() {
             return OrganizedScan::build(frame, sensor).map(Cow::Owned);

@@ -60,15 +60,20 @@ pub(crate) fn check_dual_returns(
 
 /// Pair a frame's returns on the sensor grid and detect its reflective
 /// planes (the per-frame front of every pipeline), timing both stages.
+/// The grid cells come from `measured`, the frame as measured (the same
+/// points in the same order): a deskewed frame's points have moved off
+/// their beams' directions, and the returns of one beam, moved alike but
+/// at different ranges, would no longer share a cell.
 pub(crate) fn organize_and_detect(
     frame: &Frame,
+    measured: &Frame,
     sensor: &SensorModel,
     detector: &dyn ReflectiveDetector,
     seed: u64,
 ) -> Result<(OrganizedScan, Detection, StageTimings)> {
     let mut t = StageTimings::default();
     let start = Instant::now();
-    let scan = OrganizedScan::build(frame, sensor)?;
+    let scan = OrganizedScan::build(measured, sensor)?;
     t.add("pair", start.elapsed());
     let start = Instant::now();
     let detection = detector.detect(frame, &scan, frame_seed(seed, &frame.name));
@@ -103,8 +108,9 @@ pub fn run_single_scan_into(
     sink.begin(&[])?;
     let work = |k: usize, frame: &Frame| {
         check_points(sequence, k, frame, &sensor)?;
+        let measured = sequence.as_measured(k, frame)?;
         let (scan, detection, mut t) =
-            organize_and_detect(frame, &sensor, detector.as_ref(), config.seed)?;
+            organize_and_detect(frame, &measured, &sensor, detector.as_ref(), config.seed)?;
         let start = Instant::now();
         let decisions = classifier.classify(&FrameInput {
             beam_hits: None,

@@ -5,7 +5,9 @@
 //! 1. Front end, per frame and in parallel (it does not depend on the
 //!    pose): organize the scan, detect the reflective planes, extract the
 //!    ground and ordinary planes from the filtered cloud
-//!    ([`frame_features`]).
+//!    ([`frame_features`]). A frame whose points carry their times is
+//!    first deskewed with tracking's velocity ([`crate::slam::deskew`]),
+//!    so its front end runs in order, just before it is tracked.
 //! 2. Tracking, in timestamp order ([`Tracker`]): predict, register to the
 //!    previous frame, register to the map, update the map, close loops
 //!    ([`track_sequence`]).
@@ -13,11 +15,13 @@
 //!    the configured [`Backend`], then the frames between keyframes placed
 //!    against the solved planes ([`optimize_tracked`]).
 //! 4. Classification: the plane-optimized pipeline run with the estimated
-//!    poses ([`classify_with_poses`]).
+//!    poses ([`classify_with_poses`]); frames with per-point times are
+//!    deskewed with the velocity of the estimated poses
+//!    ([`Sequence`]'s frames).
 
 use std::time::{Duration, Instant};
 
-use nalgebra::Isometry3;
+use nalgebra::{Isometry3, Vector6};
 
 use super::plane_optimized::run_plane_optimized_into;
 use super::registry::{detector, extractor, frame_seed, merger, rejector};
@@ -30,6 +34,7 @@ use crate::frontend::{reflective_planes, ExtractorParams, FramePlane, PlaneExtra
 use crate::map::PlaneMap;
 use crate::reflect::ReflectiveDetector;
 use crate::sensor::SensorModel;
+use crate::slam::deskew::{deskewed, is_timed, smoothed_velocities, VELOCITY_HALF_WINDOW};
 use crate::slam::graph::{optimized_poses, segment_graph, tracking_graph, update_map};
 use crate::slam::loop_closure::merge_duplicates;
 use crate::slam::{FrameReport, LoopConstraint, PointParams, ScanSamples, Tracker, TrackingLog};
@@ -93,7 +98,33 @@ pub fn frame_features(
     points: &PointParams,
     seed: u64,
 ) -> Result<(FrameFeatures, StageTimings)> {
-    let (scan, detection, mut t) = organize_and_detect(frame, sensor, detector, seed)?;
+    frame_features_measured(
+        frame,
+        frame,
+        sensor,
+        detector,
+        extractor,
+        extractor_params,
+        points,
+        seed,
+    )
+}
+
+/// [`frame_features`] of a deskewed `frame` whose grid cells come from
+/// `measured`, the frame as measured (its points in the same order; see
+/// [`crate::slam::deskew`]).
+#[allow(clippy::too_many_arguments)]
+pub fn frame_features_measured(
+    frame: &Frame,
+    measured: &Frame,
+    sensor: &SensorModel,
+    detector: &dyn ReflectiveDetector,
+    extractor: &dyn PlaneExtractor,
+    extractor_params: &ExtractorParams,
+    points: &PointParams,
+    seed: u64,
+) -> Result<(FrameFeatures, StageTimings)> {
+    let (scan, detection, mut t) = organize_and_detect(frame, measured, sensor, detector, seed)?;
     let start = Instant::now();
     let mut planes = extractor.extract(frame, &scan, &detection, extractor_seed(seed, &frame.name));
     planes.extend(reflective_planes(frame, &detection, extractor_params));
@@ -127,12 +158,70 @@ pub fn run_slam(
 
 /// The front end and tracking of Reflection SLAM over `sequence` (with the
 /// sliding window when configured), without the batch back-end.
+///
+/// Frames whose points carry their times are deskewed (unless the
+/// sequence's deskewing is off, [`Sequence::without_deskew`]) in two
+/// passes: the first deskews each frame with the velocity tracking has
+/// reached (constant velocity, as KISS-ICP), which extrapolates the
+/// motion of the sweep from the frames before it; the second tracks the
+/// sequence again with every frame deskewed with the motion the first
+/// found over its own sweep (from its pose to the next one's, averaged
+/// over the intervals around it, [`smoothed_velocities`]). A frame's sweep runs from its stamp on (the
+/// simulator's and Ouster's convention), so tracking alone can only guess
+/// its motion: where the sensor turns while it walks, the constant
+/// body-frame twist of the last interval points the translation one
+/// interval's turn off (4.5° at 45 deg/s), a bias the second pass does
+/// not have. Sequences without per-point times are tracked once, as
+/// before.
 pub fn track_sequence(
     sequence: &Sequence,
     config: &Config,
     origin: Option<Isometry3<f64>>,
 ) -> Result<Tracked> {
+    if !sequence.deskew_enabled() {
+        return track_pass(sequence, config, origin, Deskew::Off);
+    }
+    let first = track_pass(sequence, config, origin, Deskew::Tracking)?;
+    if first.timed_frames == 0 {
+        return Ok(first);
+    }
+    let poses: Vec<Isometry3<f64>> = first.log.frames.iter().map(|f| f.pose).collect();
+    let stamps: Vec<f64> = sequence.entries.iter().map(|e| e.stamp).collect();
+    let velocities = smoothed_velocities(&poses, &stamps, VELOCITY_HALF_WINDOW);
+    let mut second = track_pass(sequence, config, origin, Deskew::Given(&velocities))?;
+    // Both passes' work counts.
+    second.timings.merge_stages(&first.timings);
+    for (t, f) in second.frame_times.iter_mut().zip(&first.frame_times) {
+        *t += *f;
+    }
+    Ok(second)
+}
+
+/// Where tracking takes the velocity that deskews a frame with per-point
+/// times.
+#[derive(Clone, Copy)]
+enum Deskew<'a> {
+    /// Frames are tracked as read.
+    Off,
+    /// The velocity tracking has reached (the front end of such frames
+    /// runs in order, just before each is tracked).
+    Tracking,
+    /// One body-frame twist per second per frame.
+    Given(&'a [Vector6<f64>]),
+}
+
+/// One pass of the front end and tracking over `sequence`, frames with
+/// per-point times deskewed as `deskew` says.
+fn track_pass(
+    sequence: &Sequence,
+    config: &Config,
+    origin: Option<Isometry3<f64>>,
+    deskew: Deskew<'_>,
+) -> Result<Tracked> {
     let wall = Instant::now();
+    // Never deskewed with the poses the sequence may bring (a simulation's
+    // true ones): tracking deskews with its own estimate.
+    let sequence = &sequence.clone().without_deskew();
     let sensor = sequence.sensor(config)?;
     let detector = detector(config, &sensor);
     let extractor = extractor(config);
@@ -141,6 +230,26 @@ pub fn track_sequence(
     let mut reports = Vec::with_capacity(sequence.len());
     let mut frame_times = Vec::with_capacity(sequence.len());
     let mut second_returns = 0;
+    let mut timed_frames = 0;
+    let features_of = |frame: &Frame, velocity: Option<&Vector6<f64>>| {
+        let start = Instant::now();
+        let straight = velocity.map(|v| deskewed(frame, v));
+        let took = start.elapsed();
+        let (features, mut t) = frame_features_measured(
+            straight.as_ref().unwrap_or(frame),
+            frame,
+            &sensor,
+            detector.as_ref(),
+            extractor.as_ref(),
+            &config.extractor,
+            &config.slam.points,
+            config.seed,
+        )?;
+        if straight.is_some() {
+            t.add("deskew", took);
+        }
+        Ok((features, t))
+    };
     // 1. The front end, a window of frames at a time in parallel (it does
     // not depend on the pose), then 2. tracking of the window in order:
     // only a frame's planes outlive its window.
@@ -148,17 +257,19 @@ pub fn track_sequence(
         "track",
         |k, frame| {
             check_points(sequence, k, frame, &sensor)?;
-            frame_features(
-                frame,
-                &sensor,
-                detector.as_ref(),
-                extractor.as_ref(),
-                &config.extractor,
-                &config.slam.points,
-                config.seed,
-            )
+            match deskew {
+                _ if !is_timed(frame) => features_of(frame, None).map(Some),
+                Deskew::Off => features_of(frame, None).map(Some),
+                Deskew::Tracking => Ok(None),
+                Deskew::Given(v) => features_of(frame, v.get(k)).map(Some),
+            }
         },
-        |_, frame, (features, t)| {
+        |_, frame, features| {
+            let (features, t) = match features {
+                Some(done) => done,
+                None => features_of(frame, Some(&tracker.velocity()))?,
+            };
+            timed_frames += usize::from(is_timed(frame));
             timings.merge(&t);
             second_returns += frame.second_returns();
             let start = Instant::now();
@@ -195,6 +306,7 @@ pub fn track_sequence(
         reports,
         frame_times,
         timings,
+        timed_frames,
     })
 }
 
@@ -227,6 +339,9 @@ pub struct Tracked {
     pub frame_times: Vec<Duration>,
     /// Time per stage.
     pub timings: StageTimings,
+    /// Frames whose points carry their times (deskewed unless the
+    /// sequence's deskewing is off).
+    pub timed_frames: usize,
 }
 
 /// Run the batch back-end of `config` on a tracking result (step 3: the
@@ -258,6 +373,7 @@ pub fn optimize_tracked_with(
         reports,
         frame_times,
         mut timings,
+        ..
     } = tracked;
     // Tracking's poses as the sliding window left them.
     let poses: Vec<Isometry3<f64>> = log.frames.iter().map(|f| f.pose).collect();

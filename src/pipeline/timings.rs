@@ -39,6 +39,14 @@ impl StageTimings {
         self.frames += other.frames;
     }
 
+    /// Add `other`'s time per stage, not its frames (a second pass over
+    /// the same frames).
+    pub fn merge_stages(&mut self, other: &StageTimings) {
+        for (n, d) in &other.stages {
+            self.add(n, *d);
+        }
+    }
+
     /// A table of milliseconds per frame for each stage.
     pub fn table(&self) -> String {
         let per = |d: Duration| d.as_secs_f64() * 1e3 / self.frames.max(1) as f64;

@@ -30,8 +30,9 @@
 //! as the real data is; the physical path of its echo stays in its
 //! [`PointTruth`].
 //!
-//! Simplifications: the whole revolution is taken at one pose (no motion
-//! distortion within a sweep), beams have no divergence (no mixed pixels at
+//! Simplifications: by default the whole revolution is taken at one pose
+//! (no motion distortion within a sweep; `[sensor] sweep = true` fires the
+//! beams over the period while the sensor moves), beams have no divergence (no mixed pixels at
 //! edges), and the sensor is upright (yaw only).
 //!
 //! ```
@@ -63,7 +64,7 @@ pub use dataset::SimDataset;
 pub use echo::{label, Echo};
 pub use labels::LabelRule;
 pub use material::{Material, MaterialKind};
-pub use scene::Scene;
+pub use scene::{Scene, SceneChanges};
 pub use simulator::{frame_seed, PointTruth, SimFrame, Simulator};
 pub use stats::{LabelCounts, LabelShares};
 pub use truth::{PlaneTally, TruePlanes};
@@ -104,20 +105,31 @@ impl SceneSource {
     /// frames: a family's (drawn) or a changed one's; `None` for a named
     /// scene as it is.
     pub fn resolve_for(&self, sensor: Option<&str>) -> Result<(Scene, Option<String>)> {
-        let (text, origin) = match (self, sensor) {
-            (SceneSource::Named(name), None) => return Ok((Scene::resolve(name)?, None)),
-            (SceneSource::Named(name), Some(_)) => Scene::text_of(name)?,
-            (SceneSource::Family { family, seed }, _) => {
+        self.resolve_with(&SceneChanges {
+            sensor: sensor.map(str::to_string),
+            ..Default::default()
+        })
+    }
+
+    /// The scene with `changes` made to it (`simulate --sensor X --sweep
+    /// --speed 1 --turn-rate 45`), and the scene file to write beside its
+    /// frames: a family's (drawn) or a changed one's; `None` for a named
+    /// scene as it is.
+    pub fn resolve_with(&self, changes: &SceneChanges) -> Result<(Scene, Option<String>)> {
+        let unchanged = changes.is_empty();
+        let (text, origin) = match self {
+            SceneSource::Named(name) if unchanged => return Ok((Scene::resolve(name)?, None)),
+            SceneSource::Named(name) => Scene::text_of(name)?,
+            SceneSource::Family { family, seed } => {
                 let generated = family::generate(family, *seed)?;
-                if sensor.is_none() {
+                if unchanged {
                     return Ok((generated.scene, Some(generated.toml)));
                 }
                 let origin = std::path::PathBuf::from(format!("family:{family}/{seed}"));
                 (generated.toml, origin)
             }
         };
-        let sensor = sensor.unwrap_or_default();
-        let (scene, toml) = Scene::with_sensor(&text, &origin, sensor)?;
+        let (scene, toml) = Scene::with_changes(&text, &origin, changes)?;
         Ok((scene, Some(toml)))
     }
 }

@@ -9,6 +9,21 @@
 //! its return mode ([`returns::select`], [`returns::select_triple`]) and its
 //! intensities its scale (`simulated_intensity`).
 //!
+//! With the sensor's `sweep` on ([`SensorSetup::sweep`](super::scene::SensorSetup::sweep)),
+//! a frame is not taken at one instant: its beams are fired over the
+//! sensor's period (`1 / rate_hz` of its model) while the sensor moves
+//! along the trajectory, each cast from the pose at its own firing time,
+//! and each point is written in the sensor frame *of that time*, as a real
+//! driver writes it, with [`Point::time`] its firing time after the
+//! frame's stamp. The convention: **a frame's stamp and its pose (the pose
+//! file) are the sweep's start**, the first firing (as Ouster's `t` counts
+//! from the scan's start), so times lie in `[0, period)`. A spinning
+//! sensor's column `c` (azimuth `c · 360 / columns - 180` deg) fires at
+//! `c / (columns · rate_hz)`: the head turns counter-clockwise from the
+//! seam behind it (the same column order as [`SensorModel::column_of`](crate::sensor::SensorModel::column_of)); a
+//! rosette's pulse `i` fires at `i / pulses_per_second`. With `sweep` off
+//! every point has time 0 and the output is what it always was.
+//!
 //! Frames are independent: frame `k` depends only on the scene, `k` and the
 //! run's seed (through [`frame_seed`]), so they can be generated in any
 //! order or in parallel and the output is identical.
@@ -79,6 +94,9 @@ pub struct Simulator {
     /// of a column in turn), without the columns of the blind sector (empty
     /// for a rosette sensor).
     beams: Vec<DVec3>,
+    /// Firing time of each of `beams` after the frame's stamp, seconds
+    /// (its column's share of the period; used only with `sweep`).
+    beam_times: Vec<f64>,
     /// The rosette of a rosette sensor, and its pulses per frame.
     rosette: Option<(Rosette, usize)>,
     min_signal: f64,
@@ -113,13 +131,16 @@ impl Simulator {
             .filter(|_| model.is_rosette());
         let spinning = if rosette.is_some() { 0 } else { model.columns };
         let mut beams = Vec::with_capacity(rings * spinning);
+        let mut beam_times = Vec::with_capacity(rings * spinning);
         for col in 0..spinning {
             if sensor.is_blind(model.column_azimuth_deg(col)) {
                 continue;
             }
+            let time = col as f64 / (spinning as f64 * model.rate_hz);
             for ring in 0..rings {
                 let d = model.beam_direction(ring, col);
                 beams.push(DVec3::new(d.x, d.y, d.z));
+                beam_times.push(time);
             }
         }
         let period_us = (1e6 / model.rate_hz).round().max(1.0) as u64;
@@ -132,6 +153,7 @@ impl Simulator {
             scene: scene.clone(),
             tracer,
             beams,
+            beam_times,
             rosette,
             min_signal,
             period_us,
@@ -194,12 +216,32 @@ impl Simulator {
         (name, stamp)
     }
 
-    /// True pose of frame `k`.
+    /// True pose of frame `k`: at its stamp, the start of its sweep.
     pub fn pose(&self, k: usize) -> StampedPose {
         let t = k as f64 * self.period_us as f64 * 1e-6;
         StampedPose {
             stamp: self.stamp(k).1,
             pose: self.scene.trajectory.pose(t),
+        }
+    }
+
+    /// The sensor's rotation and origin in the world `time` seconds after
+    /// frame `k`'s stamp.
+    fn pose_at(&self, k: usize, time: f64) -> (DMat3, DVec3) {
+        let t = k as f64 * self.period_us as f64 * 1e-6 + time;
+        to_glam(&self.scene.trajectory.pose(t))
+    }
+
+    /// Firing time of beam `i` of frame `k` after the frame's stamp,
+    /// seconds: 0 unless the sensor sweeps.
+    #[inline]
+    fn firing_time(&self, i: usize) -> f64 {
+        if !self.scene.sensor.sweep {
+            return 0.0;
+        }
+        match &self.rosette {
+            Some((r, _)) => i as f64 / r.pulses_per_second,
+            None => self.beam_times[i],
         }
     }
 
@@ -234,15 +276,9 @@ impl Simulator {
         let model = &sensor.model;
         let pose = self.pose(k);
         let (name, stamp) = self.stamp(k);
-        let q = pose.pose.rotation.to_rotation_matrix();
-        let m = q.matrix();
-        let rot = DMat3::from_cols(
-            DVec3::new(m[(0, 0)], m[(1, 0)], m[(2, 0)]),
-            DVec3::new(m[(0, 1)], m[(1, 1)], m[(2, 1)]),
-            DVec3::new(m[(0, 2)], m[(1, 2)], m[(2, 2)]),
-        );
-        let tr = pose.pose.translation.vector;
-        let origin = DVec3::new(tr.x, tr.y, tr.z);
+        let (mut rot, mut origin) = to_glam(&pose.pose);
+        // The firing time the pose `(rot, origin)` is for.
+        let mut posed_at = 0.0;
         let mut rng = SplitMix64::new(frame_seed(seed, k));
         let crop = sensor.crop_range.unwrap_or(f64::INFINITY);
         let res = model.range_resolution;
@@ -262,6 +298,11 @@ impl Simulator {
             };
             if sensor.dropout > 0.0 && rng.unit() < sensor.dropout {
                 continue;
+            }
+            let time = self.firing_time(i);
+            if time != posed_at {
+                (rot, origin) = self.pose_at(k, time);
+                posed_at = time;
             }
             let dir_w = rot * dir_s;
             let first_hit = self.echoes_into(origin, dir_w, &mut echoes);
@@ -296,7 +337,7 @@ impl Simulator {
                     ring,
                     ret,
                     label: label_of(e, r),
-                    time: 0.0,
+                    time: time as f32,
                 });
                 truth.push(PointTruth {
                     surface: e.surface,
@@ -337,6 +378,19 @@ impl Simulator {
             truth,
         }
     }
+}
+
+/// The rotation matrix and the translation of a pose, as glam types.
+fn to_glam(pose: &nalgebra::Isometry3<f64>) -> (DMat3, DVec3) {
+    let q = pose.rotation.to_rotation_matrix();
+    let m = q.matrix();
+    let rot = DMat3::from_cols(
+        DVec3::new(m[(0, 0)], m[(1, 0)], m[(2, 0)]),
+        DVec3::new(m[(0, 1)], m[(1, 1)], m[(2, 1)]),
+        DVec3::new(m[(0, 2)], m[(1, 2)], m[(2, 2)]),
+    );
+    let tr = pose.translation.vector;
+    (rot, DVec3::new(tr.x, tr.y, tr.z))
 }
 
 /// `range + sigma · N(0, 1)`, never negative; no random draw when `sigma`

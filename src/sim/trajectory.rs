@@ -6,7 +6,11 @@
 //! around; an open path is driven back and forth (the sensor turns around at
 //! the ends), so any number of frames is defined. Poses are
 //! `T_world_sensor`: the heading's yaw, then a fixed mounting tilt (roll
-//! and pitch, zero by default: the sensor upright).
+//! and pitch, zero by default: the sensor upright). A turn rate (zero by
+//! default) adds a yaw growing at that rate with time on top of the
+//! heading: a sensor that keeps turning while it walks (a hand-held
+//! scanner swept round, a robot spinning), the motion that smears a sweep
+//! most (issue 40: "walks at 1 m/s, turns at 45 deg/s").
 
 use glam::DVec3;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -27,6 +31,8 @@ pub struct Trajectory {
     /// Fixed mounting rotation (roll about x, then pitch about y), applied
     /// in the sensor frame after the heading.
     tilt: UnitQuaternion<f64>,
+    /// Yaw rate on top of the heading, rad/s.
+    turn_rate: f64,
 }
 
 impl Trajectory {
@@ -82,6 +88,7 @@ impl Trajectory {
             closed,
             smoothing,
             tilt: UnitQuaternion::identity(),
+            turn_rate: 0.0,
         })
     }
 
@@ -235,11 +242,32 @@ impl Trajectory {
         Ok(self)
     }
 
+    /// The same trajectory with the sensor turning about its vertical axis
+    /// at `rate` deg/s on top of the path's heading (within ±720 deg/s;
+    /// 0: the heading alone).
+    pub fn with_turn_rate_deg(mut self, rate: f64) -> Result<Self, String> {
+        if !(rate.is_finite() && rate.abs() <= 720.0) {
+            return Err(format!(
+                "turn_rate_deg must be within ±720 deg/s, got {rate}"
+            ));
+        }
+        self.turn_rate = rate.to_radians();
+        Ok(self)
+    }
+
+    /// The turn rate on top of the heading, rad/s.
+    pub fn turn_rate(&self) -> f64 {
+        self.turn_rate
+    }
+
     /// `T_world_sensor` at time `t` seconds.
     pub fn pose(&self, t: f64) -> Isometry3<f64> {
         let s = self.speed * t;
         let p = self.position(s);
-        let yaw = self.heading(s);
+        let mut yaw = self.heading(s);
+        if self.turn_rate != 0.0 {
+            yaw += self.turn_rate * t;
+        }
         Isometry3::from_parts(
             Translation3::new(p.x, p.y, p.z),
             UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw) * self.tilt,
@@ -302,6 +330,20 @@ mod tests {
         assert!((open.heading(14.0).abs() - 0.0).abs() < 1e-9); // driving back: +x
         let closed = square(true);
         assert!((closed.position(17.0) - DVec3::new(1.0, 0.0, 1.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_turn_rate_adds_yaw_with_time() {
+        let t = square(true).with_turn_rate_deg(45.0).unwrap();
+        let (a, b) = (t.pose(1.5), t.pose(1.6));
+        let turned = a.rotation.angle_to(&b.rotation).to_degrees();
+        // On a straight piece the path's heading is constant.
+        assert!((turned - 4.5).abs() < 1e-9, "{turned}");
+        assert_eq!(
+            square(true).pose(1.5),
+            square(true).with_turn_rate_deg(0.0).unwrap().pose(1.5)
+        );
+        assert!(square(true).with_turn_rate_deg(f64::NAN).is_err());
     }
 
     #[test]

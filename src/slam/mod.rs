@@ -3,6 +3,8 @@
 //!
 //! The paper's "Global Map Update", made robust where it falls short:
 //!
+//! 0. [`deskew`]: a frame whose points carry their times is moved to its
+//!    stamp with the motion model's velocity before anything else.
 //! 1. [`motion`]: predict the pose (constant velocity over the elapsed time,
 //!    bounded acceleration; [`clock`] gives the interval and reports gaps).
 //! 2. Frame-to-frame registration ([`crate::registration`]) from the
@@ -26,6 +28,7 @@
 
 pub mod association;
 pub mod clock;
+pub mod deskew;
 pub mod graph;
 pub mod log;
 pub mod loop_closure;

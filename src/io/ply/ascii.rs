@@ -5,7 +5,7 @@
 
 use super::header::{Element, Header};
 use super::number::{is_ws, number};
-use super::vertex::{store_int, truncated, Loc, Slot, VertexLayout};
+use super::vertex::{store_int, store_time, truncated, Loc, Slot, VertexLayout};
 use crate::cloud::Point;
 
 /// Skip spaces, tabs and carriage returns (not newlines).
@@ -178,7 +178,11 @@ pub(super) fn parse_ascii(
                 _ => {
                     let (v, end) = number::<f64>(b, pos).ok_or_else(|| bad(pos))?;
                     pos = end;
-                    store_int(&mut p, slot, v, loc)?;
+                    if slot == Slot::Time {
+                        store_time(&mut p, v, loc)?;
+                    } else {
+                        store_int(&mut p, slot, v, loc)?;
+                    }
                 }
             }
         }

@@ -1,7 +1,7 @@
 //! The `binary_little_endian` body: fixed-size records, read in place.
 
 use super::header::{Element, Header, Scalar};
-use super::vertex::{store_int, truncated, Loc, Slot, VertexLayout};
+use super::vertex::{store_int, store_time, truncated, Loc, Slot, VertexLayout};
 use crate::cloud::Point;
 
 /// Parse the vertices of a `binary_little_endian` body, after checking that
@@ -107,6 +107,7 @@ fn parse_records(
                         _ => p.intensity = v,
                     }
                 }
+                Slot::Time => store_time(&mut p, ty.read_le(b), loc)?,
                 _ => store_int(&mut p, slot, ty.read_le(b), loc)?,
             }
         }

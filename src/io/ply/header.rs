@@ -40,6 +40,25 @@ impl Scalar {
         })
     }
 
+    /// Whether the type is a floating-point one (`float`, `double`).
+    pub(super) fn is_float(self) -> bool {
+        matches!(self, Scalar::F32 | Scalar::F64)
+    }
+
+    /// The name the writer gives the type (for messages).
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            Scalar::I8 => "char",
+            Scalar::U8 => "uchar",
+            Scalar::I16 => "short",
+            Scalar::U16 => "ushort",
+            Scalar::I32 => "int",
+            Scalar::U32 => "uint",
+            Scalar::F32 => "float",
+            Scalar::F64 => "double",
+        }
+    }
+
     /// Bytes of one value.
     pub(super) fn size(self) -> usize {
         match self {

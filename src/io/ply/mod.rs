@@ -2,7 +2,10 @@
 //! properties found by name) and a compact binary writer.
 //!
 //! The reader needs the vertex properties `x y z intensity ring return` and
-//! reads `label` when present; every other property (`nx ny nz`, ...) is
+//! reads `label` and `time` (per-point time, seconds after the frame's
+//! stamp, `float` or `double`; [`crate::cloud::Point::time`]) when
+//! present; the writer writes `time` only for frames whose points carry
+//! one; every other property (`nx ny nz`, ...) is
 //! skipped without being parsed. Properties may have any PLY scalar type.
 //! Elements other than `vertex` are skipped; list properties are rejected.
 //! A header comment `comment intensity_scale raw-power` (or `reflectivity`)

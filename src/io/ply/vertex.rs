@@ -15,6 +15,9 @@ pub(super) enum Slot {
     Ring,
     Return,
     Label,
+    /// Per-point time, seconds after the frame's stamp (`float` or
+    /// `double`).
+    Time,
 }
 
 impl Slot {
@@ -29,9 +32,14 @@ impl Slot {
             Slot::Ring => "ring",
             Slot::Return => "return",
             Slot::Label => "label",
+            Slot::Time => TIME_PROPERTY,
         }
     }
 }
+
+/// The name of the optional per-point time property: seconds after the
+/// frame's stamp ([`Point::time`]), `float` or `double`.
+pub(crate) const TIME_PROPERTY: &str = "time";
 
 /// The vertex properties mapped to point fields.
 pub(super) struct VertexLayout {
@@ -57,8 +65,18 @@ impl VertexLayout {
                 "ring" => Slot::Ring,
                 "return" => Slot::Return,
                 "label" => Slot::Label,
+                TIME_PROPERTY => Slot::Time,
                 _ => Slot::Skip,
             });
+        }
+        // A time is a fraction of a sweep: an integer type cannot hold it.
+        if let Some((ty, _)) = el.props.iter().find(|(_, n)| n == TIME_PROPERTY) {
+            if !ty.is_float() {
+                return Err(format!(
+                    "property '{TIME_PROPERTY}' must be float or double (seconds after the frame's stamp), got {}",
+                    ty.name()
+                ));
+            }
         }
         for need in [
             Slot::X,
@@ -81,6 +99,26 @@ impl VertexLayout {
             names: el.props.iter().map(|(_, n)| n.clone()).collect(),
         })
     }
+}
+
+/// Store a per-point time (seconds after the frame's stamp) into `p`; a
+/// NaN or infinite time is an error (unlike a coordinate, it is no
+/// driver's placeholder for a missing return).
+#[inline(always)]
+pub(super) fn store_time(p: &mut Point, v: f64, loc: Loc) -> std::result::Result<(), String> {
+    let t = v as f32;
+    if t.is_finite() {
+        p.time = t;
+        Ok(())
+    } else {
+        Err(bad_time(v, loc))
+    }
+}
+
+/// The message for a time that is not a finite number of seconds.
+#[cold]
+fn bad_time(v: f64, loc: Loc) -> String {
+    format!("{loc}: {TIME_PROPERTY} must be a finite number of seconds, got {v}")
 }
 
 /// Where a vertex is, for messages: "line 17, vertex 5" or "vertex 5".

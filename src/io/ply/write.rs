@@ -1,5 +1,5 @@
-//! The frame writer: `x y z intensity ring return [label]`, ascii or
-//! binary little-endian, written atomically.
+//! The frame writer: `x y z intensity ring return [label] [time]`, ascii
+//! or binary little-endian, written atomically.
 
 use std::io::Write;
 use std::path::Path;
@@ -17,10 +17,13 @@ pub enum PlyEncoding {
     BinaryLittleEndian,
 }
 
-/// Write a frame with properties `x y z intensity ring return label`
-/// (`label` only when [`Frame::has_labels`]), atomically.
+/// Write a frame with properties `x y z intensity ring return label time`
+/// (`label` only when [`Frame::has_labels`], `time` only when some point
+/// has a non-zero [`time`](crate::cloud::Point::time): frames without
+/// per-point time are written as before), atomically.
 ///
-/// Types are `float x y z intensity`, `ushort ring`, `uchar return label`.
+/// Types are `float x y z intensity time`, `ushort ring`, `uchar return
+/// label`.
 /// A frame whose intensity scale is known says so in a header comment
 /// (`comment intensity_scale raw-power`), which the reader takes back.
 /// The ascii encoding writes floats in their shortest round-trip form, so
@@ -60,6 +63,10 @@ pub fn write_frame_of(
         if frame.has_labels {
             w.write_all(b"property uchar label\n")?;
         }
+        let timed = frame.points.iter().any(|p| p.time != 0.0);
+        if timed {
+            writeln!(w, "property float {}", super::vertex::TIME_PROPERTY)?;
+        }
         w.write_all(b"end_header\n")?;
         match encoding {
             PlyEncoding::Ascii => {
@@ -72,11 +79,14 @@ pub fn write_frame_of(
                     if frame.has_labels {
                         write!(w, " {}", p.label)?;
                     }
+                    if timed {
+                        write!(w, " {}", p.time)?;
+                    }
                     w.write_all(b"\n")?;
                 }
             }
             PlyEncoding::BinaryLittleEndian => {
-                let rec = if frame.has_labels { 20 } else { 19 };
+                let rec = 19 + usize::from(frame.has_labels) + 4 * usize::from(timed);
                 let mut buf = Vec::with_capacity(rec * 4096);
                 for chunk in frame.points.chunks(4096) {
                     buf.clear();
@@ -89,6 +99,9 @@ pub fn write_frame_of(
                         buf.push(p.ret);
                         if frame.has_labels {
                             buf.push(p.label);
+                        }
+                        if timed {
+                            buf.extend_from_slice(&p.time.to_le_bytes());
                         }
                     }
                     w.write_all(&buf)?;

@@ -97,6 +97,7 @@ impl Draft {
             detection_threshold: 3.0,
             blind_sector_deg: blind.then_some([157.5, 202.5]),
             dropout: Some(0.03 * rng.unit()),
+            sweep: None,
         };
         let noise_seed = rng.next_u64() >> 12;
         Self {
@@ -113,6 +114,7 @@ impl Draft {
                     heading_smoothing: 1.0,
                     frames: None,
                     tilt_deg: None,
+                    turn_rate_deg: None,
                 },
                 materials: BTreeMap::new(),
                 rooms: Vec::new(),

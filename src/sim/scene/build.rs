@@ -269,6 +269,7 @@ impl SceneFile {
         let waypoints: Vec<DVec3> = t.waypoints.iter().map(|w| DVec3::from_array(*w)).collect();
         let trajectory = Trajectory::new(waypoints, t.speed, t.closed, t.heading_smoothing)
             .and_then(|tr| tr.with_tilt_deg(t.tilt_deg.unwrap_or([0.0, 0.0])))
+            .and_then(|tr| tr.with_turn_rate_deg(t.turn_rate_deg.unwrap_or(0.0)))
             .map_err(|m| format!("trajectory: {m}"))?;
         let frames = match t.frames {
             Some(0) => return Err("trajectory: frames must be at least 1".into()),
@@ -447,6 +448,7 @@ impl SensorFile {
             return bad(format!("dropout must be in 0..0.5, got {dropout}"));
         }
         Ok(SensorSetup {
+            sweep: self.sweep.unwrap_or(false),
             dropout,
             blind_sector_deg: self.blind_sector_deg,
             model,

@@ -77,6 +77,8 @@ pub(crate) struct SensorFile {
     pub(crate) blind_sector_deg: Option<[f64; 2]>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) dropout: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) sweep: Option<bool>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -92,6 +94,8 @@ pub(crate) struct TrajectoryFile {
     pub(crate) frames: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) tilt_deg: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) turn_rate_deg: Option<f64>,
 }
 
 /// Material parameters as written in scene files (see

@@ -11,12 +11,14 @@
 //! crop_range = 25.0          # drop returns farther than this (3DRef: 25 m); optional
 //! blind_sector_deg = [157.5, 202.5]  # azimuths hidden by the operator; optional
 //! dropout = 0.01             # share of beams that return nothing; optional
+//! sweep = true               # beams fired over the sensor's period while it moves; optional
 //!
 //! [trajectory]
 //! waypoints = [[1.0, 1.0, 1.2], [8.0, 1.0, 1.2]]
 //! speed = 0.5                # m/s; frames at the sensor rate (10 Hz)
 //! loop = false
 //! tilt_deg = [1.0, -2.0]     # fixed mounting roll and pitch; optional
+//! turn_rate_deg = 45.0       # the sensor also turns about its vertical axis, deg/s; optional
 //!
 //! [materials]
 //! plaster = { type = "diffuse", reflectivity = 0.7 }
@@ -86,6 +88,13 @@ pub struct SensorSetup {
     /// Probability that a beam returns nothing at all (dust, absorbing or
     /// wet spots, electronics), drawn per beam from the frame's seed.
     pub dropout: f64,
+    /// Whether a frame's beams are fired over the sensor's period while it
+    /// moves (each from the pose at its own firing time, its point in the
+    /// sensor frame of that time, [`Point::time`](crate::cloud::Point::time)
+    /// set): motion distortion, as real sensors have. Off (the default),
+    /// the whole frame is taken at one pose. See
+    /// [`Simulator`](crate::sim::Simulator).
+    pub sweep: bool,
 }
 
 impl SensorSetup {
@@ -98,6 +107,30 @@ impl SensorSetup {
             }
             None => false,
         }
+    }
+}
+
+/// Changes to a scene as `specular simulate` makes them: another sensor,
+/// motion distortion, another speed, a turn rate. The default changes
+/// nothing.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SceneChanges {
+    /// Another sensor model (a built-in name or a sensor file).
+    pub sensor: Option<String>,
+    /// Fire the beams over the sensor's period while it moves
+    /// ([`SensorSetup::sweep`]).
+    pub sweep: bool,
+    /// Another speed along the path, m/s.
+    pub speed: Option<f64>,
+    /// Turn about the vertical axis at this rate on top of the path's
+    /// heading, deg/s (the trajectory's `turn_rate_deg`).
+    pub turn_rate_deg: Option<f64>,
+}
+
+impl SceneChanges {
+    /// Whether the changes change nothing.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
     }
 }
 
@@ -179,12 +212,38 @@ impl Scene {
     /// changed; the rest of `[sensor]` (noise, range cap, crop, blind
     /// sector) stays the scene's.
     pub fn with_sensor(text: &str, origin: &Path, sensor: &str) -> Result<(Self, String)> {
+        let changes = SceneChanges {
+            sensor: Some(sensor.to_string()),
+            ..Default::default()
+        };
+        Self::with_changes(text, origin, &changes)
+    }
+
+    /// The scene of the file `text` with `changes` made to it, and the
+    /// scene file as changed (so that it can be written beside the frames
+    /// and simulated again).
+    pub fn with_changes(
+        text: &str,
+        origin: &Path,
+        changes: &SceneChanges,
+    ) -> Result<(Self, String)> {
         let mut file: file::SceneFile =
             toml::from_str(text).map_err(|e| Error::format(origin, e.to_string().trim_end()))?;
-        file.sensor.model = match SensorModel::is_builtin(sensor) {
-            true => SensorModel::resolve(sensor)?.name,
-            false => sensor.to_string(),
-        };
+        if let Some(sensor) = &changes.sensor {
+            file.sensor.model = match SensorModel::is_builtin(sensor) {
+                true => SensorModel::resolve(sensor)?.name,
+                false => sensor.to_string(),
+            };
+        }
+        if changes.sweep {
+            file.sensor.sweep = Some(true);
+        }
+        if let Some(speed) = changes.speed {
+            file.trajectory.speed = speed;
+        }
+        if let Some(rate) = changes.turn_rate_deg {
+            file.trajectory.turn_rate_deg = Some(rate);
+        }
         let toml = toml::to_string(&file).map_err(|e| Error::format(origin, e.to_string()))?;
         Ok((Self::from_file(file, origin)?, toml))
     }

@@ -307,6 +307,14 @@ impl Tracker {
         &self.log
     }
 
+    /// The motion model's velocity after the frames tracked so far: a
+    /// body-frame twist per second `(ρ, φ)` (zero before two frames), the
+    /// motion the next frame's sweep is deskewed with
+    /// ([`crate::slam::deskew`]).
+    pub fn velocity(&self) -> nalgebra::Vector6<f64> {
+        self.motion.velocity()
+    }
+
     /// The final map and the log.
     pub fn into_parts(self) -> (PlaneMap, TrackingLog) {
         (self.map, self.log)
