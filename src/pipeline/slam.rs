@@ -258,10 +258,10 @@ fn track_pass(
         |k, frame| {
             check_points(sequence, k, frame, &sensor)?;
             match deskew {
-                _ if !is_timed(frame) => features_of(frame, None).map(Some),
-                Deskew::Off => features_of(frame, None).map(Some),
-                Deskew::Tracking => Ok(None),
-                Deskew::Given(v) => features_of(frame, v.get(k)).map(Some),
+                // Deskewed with tracking's velocity: in order, when tracked.
+                Deskew::Tracking if is_timed(frame) => Ok(None),
+                Deskew::Given(v) if is_timed(frame) => features_of(frame, v.get(k)).map(Some),
+                _ => features_of(frame, None).map(Some),
             }
         },
         |_, frame, features| {
