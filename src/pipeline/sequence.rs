@@ -249,9 +249,16 @@ impl Sequence {
         let Some(poses) = &self.poses else {
             return frame;
         };
-        use crate::slam::deskew::{smoothed_velocity, VELOCITY_HALF_WINDOW};
-        let stamps: Vec<f64> = self.entries.iter().map(|e| e.stamp).collect();
-        let velocity = smoothed_velocity(poses, &stamps, index, VELOCITY_HALF_WINDOW);
+        use crate::slam::deskew::{smoothed_velocity, velocity_window, VELOCITY_HALF_WINDOW};
+        let n = poses.len().min(self.entries.len());
+        let w = velocity_window(n, index, VELOCITY_HALF_WINDOW);
+        let stamps: Vec<f64> = self.entries[w.clone()].iter().map(|e| e.stamp).collect();
+        let velocity = smoothed_velocity(
+            &poses[w.clone()],
+            &stamps,
+            index - w.start,
+            VELOCITY_HALF_WINDOW,
+        );
         Cow::Owned(crate::slam::deskew::deskewed(&frame, &velocity))
     }
 

@@ -141,6 +141,16 @@ pub fn smoothed_velocity(
     sum / (hi - lo + 1) as f64
 }
 
+/// The frames [`smoothed_velocity`] reads for frame `k` of a sequence of
+/// `n` frames: the same velocity comes from these poses and stamps alone
+/// (with `k` counted from the range's start), so a reader that hands out
+/// one frame at a time need not gather a long sequence's stamps.
+pub fn velocity_window(n: usize, k: usize, half_window: usize) -> std::ops::Range<usize> {
+    let own = k.min(n.saturating_sub(2));
+    let start = own.saturating_sub(half_window).min(k);
+    start..(own + half_window + 2).min(n).max(start)
+}
+
 /// Intervals before and after a frame's own over which its deskewing
 /// velocity averages the motion of estimated poses
 /// ([`smoothed_velocities`]; the SLAM's second tracking pass, and every
@@ -201,6 +211,25 @@ mod tests {
             // A timed frame keeps its time-0 points where they are.
             deskew_frame(&mut f, &xi);
             prop_assert_eq!(f.points[0], before[0]);
+        }
+
+        /// The velocity from the frames of [`velocity_window`] alone is the
+        /// velocity from the whole sequence, bit for bit.
+        #[test]
+        fn the_window_holds_every_frame_the_velocity_reads(
+            steps in proptest::collection::vec((twist(), 0.05f64..0.2), 0..12),
+            k in 0usize..14,
+            half in 0usize..4,
+        ) {
+            let (mut poses, mut stamps) = (vec![Isometry3::identity()], vec![5.0]);
+            for (xi, dt) in &steps {
+                poses.push(poses[poses.len() - 1] * se3::exp(&(xi * *dt)));
+                stamps.push(stamps[stamps.len() - 1] + dt);
+            }
+            let whole = smoothed_velocity(&poses, &stamps, k, half);
+            let w = velocity_window(poses.len(), k, half);
+            let windowed = smoothed_velocity(&poses[w.clone()], &stamps[w.clone()], k - w.start, half);
+            prop_assert_eq!(whole, windowed);
         }
 
         /// The velocity from two poses reproduces the second from the
