@@ -9,6 +9,7 @@
 
 pub mod atomic;
 pub mod bag_topics;
+pub(crate) mod cdr;
 pub mod dataset;
 pub mod db3;
 pub mod frames;
