@@ -15,6 +15,7 @@ pub mod db3;
 pub mod frames;
 pub mod kitti;
 pub mod labels;
+pub mod livox_custom;
 pub mod map_ply;
 pub mod mcap_file;
 pub mod planes;
