@@ -8,6 +8,7 @@
 //! failed run never leaves a half-written output.
 
 pub mod atomic;
+pub mod bag_message;
 pub mod bag_topics;
 pub(crate) mod cdr;
 pub mod dataset;
