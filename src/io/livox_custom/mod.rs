@@ -20,7 +20,7 @@
 //!
 //! # Its CDR bytes
 //!
-//! Little-endian CDR ([`crate::io::cdr`]): offsets count from the payload
+//! Little-endian CDR (ROS 2's `CDR_LE`): offsets count from the payload
 //! start, after the 4-byte encapsulation header, and each primitive is
 //! aligned to its size. With `L` the frame id's length including its NUL
 //! and `T = align8(12 + L)`:
