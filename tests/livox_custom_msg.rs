@@ -1,7 +1,7 @@
 //! Livox `CustomMsg` bags (issue 40, part 2): what livox_ros2_driver and
 //! livox_ros_driver2 publish with `xfer_format = 1`. Simulated Avia frames
 //! (timed: the sweep on) are written as `CustomMsg`s into an MCAP bag and a
-//! `.db3` bag and read back with their positions, returns, rings,
+//! `.db3` bag (bare, and in a rosbag2 directory) and read back with their positions, returns, rings,
 //! reflectivities, per-point times and pulse pairing; a damaged message is
 //! an error naming the bag; encode and decode are inverses on random
 //! messages; `detect` and `slam --bag` read such a bag.
@@ -84,6 +84,19 @@ fn check_frames(model: &SensorModel, sent: &[Frame], back: &[Frame]) {
     }
 }
 
+/// A rosbag2 directory as `ros2 bag record -s sqlite3` leaves it: its
+/// `metadata.yaml` names the topic's type, the `.db3` file holds the
+/// messages.
+fn rosbag2_dir(dir: &Path, kind: &str, frames: &[Frame]) {
+    std::fs::create_dir_all(dir).unwrap();
+    write_db3_as(&dir.join("avia_0.db3"), kind, &messages(frames));
+    let meta = format!(
+        "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n  relative_file_paths:\n  - avia_0.db3\n  topics_with_message_count:\n  - message_count: {}\n    topic_metadata:\n      name: {TOPIC}\n      type: {kind}\n      serialization_format: cdr\n",
+        frames.len()
+    );
+    std::fs::write(dir.join("metadata.yaml"), meta).unwrap();
+}
+
 #[test]
 fn custom_msg_bags_read_back_the_simulated_avia_frames() {
     let (model, frames) = avia_frames();
@@ -93,7 +106,9 @@ fn custom_msg_bags_read_back_the_simulated_avia_frames() {
     write_mcap_as(&mcap, kind, &custom_msg_schema(kind), &messages(&frames));
     let db3 = tmp.path().join("avia.db3");
     write_db3_as(&db3, LIVOX_ROS_DRIVER2_CUSTOM_MSG, &messages(&frames));
-    for bag in [&mcap, &db3] {
+    let dir = tmp.path().join("avia_bag");
+    rosbag2_dir(&dir, LIVOX_INTERFACES_CUSTOM_MSG, &frames);
+    for bag in [&mcap, &db3, &dir] {
         check_frames(&model, &frames, &read_bag_frames(bag, TOPIC).unwrap());
         let options = BagOptions {
             driver: Some(Driver::Livox),
