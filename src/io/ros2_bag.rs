@@ -90,7 +90,8 @@ pub struct Ros2Bag {
 }
 
 impl Ros2Bag {
-    /// The `PointCloud2` frames on `topic` of the bag at `path` (any form
+    /// The `PointCloud2` (or Livox `CustomMsg`) frames on `topic` of the
+    /// bag at `path` (any form
     /// [`BagKind::of`] knows), named by their header stamps, the layout
     /// detected from the fields.
     pub fn open(path: &Path, topic: &str) -> Result<Self> {

@@ -156,7 +156,10 @@ pub fn encode_custom_msg(frame: &Frame, frame_id: &str) -> Vec<u8> {
         .points
         .iter()
         .map(|p| CustomPoint {
-            offset_time: (stamp_ns + ns(p) - timebase).clamp(0, u32::MAX as i64) as u32,
+            offset_time: stamp_ns
+                .saturating_add(ns(p))
+                .saturating_sub(timebase)
+                .clamp(0, u32::MAX as i64) as u32,
             x: p.xyz[0],
             y: p.xyz[1],
             z: p.xyz[2],

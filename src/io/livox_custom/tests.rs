@@ -147,3 +147,27 @@ fn the_schema_names_the_package_of_the_type() {
     assert!(is_custom_msg(LIVOX_INTERFACES_CUSTOM_MSG));
     assert!(!is_custom_msg("sensor_msgs/msg/PointCloud2"));
 }
+
+/// Times no message can hold are clamped, not overflowed (no panic).
+#[test]
+fn the_encoder_clamps_times_out_of_range() {
+    let mut frame = Frame {
+        name: "1.000000".into(),
+        stamp: 1.0,
+        points: vec![Point {
+            xyz: [1.0, 0.0, 0.0],
+            ret: 1,
+            ..Point::default()
+        }],
+        ..Frame::default()
+    };
+    frame.points.push(Point {
+        time: 1e30,
+        ..frame.points[0]
+    });
+    let msg = CustomMsg::parse(&encode_custom_msg(&frame, "f")).unwrap();
+    assert_eq!(msg.points[1].offset_time, u32::MAX);
+    frame.points[1].time = -1e30;
+    let msg = CustomMsg::parse(&encode_custom_msg(&frame, "f")).unwrap();
+    assert_eq!(msg.timebase, 0);
+}
