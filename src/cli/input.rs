@@ -24,7 +24,9 @@ pub struct InputArgs {
     /// from `raw/seqN/ouster_pose.txt` or `livox_pose.txt`).
     #[arg(long, required_unless_present_any = ["bag", "scene", "family"])]
     pub frames: Option<PathBuf>,
-    /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), instead of
+    /// ROS 2 bag of `sensor_msgs/msg/PointCloud2` frames (CDR), or of Livox
+    /// `CustomMsg` frames (livox_ros2_driver's `livox_interfaces/msg/CustomMsg`,
+    /// livox_ros_driver2's `livox_ros_driver2/msg/CustomMsg`), instead of
     /// `--frames`: a rosbag2 directory (`metadata.yaml` with mcap or sqlite3
     /// storage; split files are read in order), an `.mcap` file or a `.db3`
     /// file. Frames are named by their header stamp in seconds; the
@@ -38,7 +40,8 @@ pub struct InputArgs {
     /// The driver that wrote the bag, whose field layout is read (default:
     /// detected from the fields): generic (a `return` field), ouster
     /// (ouster-ros: second return on its own topic), livox
-    /// (livox_ros_driver2: return in `tag` bits), hesai
+    /// (livox_ros_driver2: return in `tag` bits; a `CustomMsg` topic is
+    /// always read as livox), hesai
     /// (HesaiLidar_ROS_2.0: both returns in one cloud, paired by order)
     /// or nebula (`return_type`). A bag without the named layout's fields
     /// is an error naming the fields it lacks.
@@ -95,7 +98,8 @@ pub enum DriverArg {
     /// ouster-ros: `x y z intensity t reflectivity ring ambient range`,
     /// return 2 on a second topic.
     Ouster,
-    /// livox_ros_driver2: `x y z intensity tag line timestamp`.
+    /// livox_ros_driver2: `x y z intensity tag line timestamp`, and both
+    /// Livox drivers' `CustomMsg`.
     Livox,
     /// HesaiLidar_ROS_2.0: `x y z intensity ring timestamp`.
     Hesai,

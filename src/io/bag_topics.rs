@@ -1,11 +1,13 @@
 //! The point-cloud topics of a bag gathered over its storage files: the
-//! topic read and, for the Ouster driver, its second-return topic, paired
-//! into frames by header stamp.
+//! topic read (a `PointCloud2` or a Livox `CustomMsg`, [`MessageKind`])
+//! and, for the Ouster driver, its second-return topic, paired into frames
+//! by header stamp.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use super::pointcloud2::{decode, Decoded, Driver, POINTCLOUD2};
+use super::bag_message::{check_custom_driver, check_type, MessageKind};
+use super::pointcloud2::{decode, Decoded, Driver};
 use crate::cloud::{Frame, SetAside};
 use crate::{Error, Result};
 
@@ -36,8 +38,11 @@ pub struct TopicFrames {
     second: String,
     /// Whether the second topic, when not named, is a CDR `PointCloud2`.
     second_usable: bool,
-    /// The layout, named or detected from the first message.
+    /// The layout, named or detected from the first message (always
+    /// Livox for a `CustomMsg` topic).
     driver: Option<Driver>,
+    /// The type of the topic read (`PointCloud2` until noted otherwise).
+    kind: MessageKind,
     frames: Vec<Decoded>,
     seconds: Vec<RawMessage>,
     /// Topic name -> (type, messages).
@@ -59,6 +64,7 @@ impl TopicFrames {
         Self {
             topic: topic.to_string(),
             driver: options.driver,
+            kind: MessageKind::PointCloud2,
             second_usable: true,
             second,
             options,
@@ -86,9 +92,11 @@ impl TopicFrames {
     }
 
     /// Note `messages` messages of topic `name` of type `kind` serialized
-    /// as `encoding` in the storage file `path`; the topic gathered (and a
-    /// second topic named in the options) must be a CDR `PointCloud2`, else
-    /// the error names `path` and what it is.
+    /// as `encoding` in the storage file `path`; the topic gathered must be
+    /// a CDR point cloud of a supported type ([`MessageKind::of`]; a
+    /// `CustomMsg` is read with the Livox layout, and another named driver
+    /// is an error), a second topic named in the options a CDR
+    /// `PointCloud2`; else the error names `path` and what it is.
     pub fn note(
         &mut self,
         path: &Path,
@@ -97,9 +105,17 @@ impl TopicFrames {
         encoding: &str,
         messages: usize,
     ) -> Result<()> {
-        if name == self.topic || (name == self.second && self.options.second_topic.is_some()) {
+        let point_cloud2 = MessageKind::of(kind, encoding) == Some(MessageKind::PointCloud2);
+        if name == self.topic {
+            self.kind = check_type(path, name, kind, encoding)?;
+            if self.kind == MessageKind::LivoxCustom {
+                check_custom_driver(self.driver)
+                    .map_err(|m| Error::format(path, format!("topic {name} is {kind}: {m}")))?;
+                self.driver = Some(Driver::Livox);
+            }
+        } else if name == self.second && self.options.second_topic.is_some() {
             check_type(path, name, kind, encoding)?;
-        } else if name == self.second && check_type(path, name, kind, encoding).is_err() {
+        } else if name == self.second && !point_cloud2 {
             self.second_usable = false;
         }
         let entry = self.seen.entry(name.to_string());
@@ -118,7 +134,9 @@ impl TopicFrames {
             }
             return Ok(());
         }
-        let decoded = decode(data, self.driver, 1)
+        let decoded = self
+            .kind
+            .decode(data, self.driver, 1)
             .map_err(|m| Error::format(path, format!("{name} message at {time_ns} ns: {m}")))?;
         self.driver = Some(decoded.driver);
         self.frames.push(decoded);
@@ -263,17 +281,6 @@ fn append(first: &mut Decoded, second: Decoded) {
         .positions
         .extend(second.aside.positions.iter().map(|p| p + inputs));
     aside.labels.extend(second.aside.labels);
-}
-
-/// The topic read must be a CDR `PointCloud2`.
-pub(crate) fn check_type(path: &Path, topic: &str, kind: &str, encoding: &str) -> Result<()> {
-    if kind == POINTCLOUD2 && encoding == "cdr" {
-        return Ok(());
-    }
-    Err(Error::format(
-        path,
-        format!("topic {topic} is {kind} in {encoding}, not {POINTCLOUD2} in cdr"),
-    ))
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! One MCAP file (a bag's storage file, or a bag of its own): its
-//! `PointCloud2` messages gathered into a [`TopicFrames`].
+//! point-cloud messages (`PointCloud2` or Livox `CustomMsg`, the type from
+//! the channel's schema name) gathered into a [`TopicFrames`].
 //!
 //! Read with the mcap crate's sans-io reader and a record length limit, and
 //! every chunk's claimed size checked before it is decompressed: a damaged

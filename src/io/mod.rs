@@ -8,12 +8,15 @@
 //! failed run never leaves a half-written output.
 
 pub mod atomic;
+pub mod bag_message;
 pub mod bag_topics;
+pub(crate) mod cdr;
 pub mod dataset;
 pub mod db3;
 pub mod frames;
 pub mod kitti;
 pub mod labels;
+pub mod livox_custom;
 pub mod map_ply;
 pub mod mcap_file;
 pub mod planes;

@@ -1,6 +1,8 @@
 //! ROS 2 bags: dual-return frames as `sensor_msgs/msg/PointCloud2`
 //! messages in CDR, in every form `ros2 bag record` leaves them, laid out
-//! as the drivers write them.
+//! as the drivers write them; or as the Livox drivers' `CustomMsg`
+//! ([`super::livox_custom`], read with the Livox layout whatever the
+//! options; the topic's type says which, [`super::bag_message`]).
 //!
 //! [`read_bag_frames`] takes a rosbag2 directory (its `metadata.yaml` names
 //! the storage, `mcap` or `sqlite3`, and the storage files in order, several
@@ -43,7 +45,8 @@ pub(crate) const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 /// The first bytes of a zstd frame (rosbag2's `--compression-mode file`).
 const ZSTD_MAGIC: &[u8] = &[0x28, 0xb5, 0x2f, 0xfd];
 
-/// Every `PointCloud2` message on `topic` of the bag at `path`, as frames in
+/// Every point-cloud message (`PointCloud2` or Livox `CustomMsg`) on
+/// `topic` of the bag at `path`, as frames in
 /// timestamp order. `path` is a rosbag2 directory (or its `metadata.yaml`),
 /// an MCAP file or an SQLite (`.db3`) file; see [`BagKind::of`]. The layout
 /// is detected from the fields ([`read_bag_frames_with`] names it).
@@ -87,7 +90,8 @@ pub struct Ros2Bag {
 }
 
 impl Ros2Bag {
-    /// The `PointCloud2` frames on `topic` of the bag at `path` (any form
+    /// The `PointCloud2` (or Livox `CustomMsg`) frames on `topic` of the
+    /// bag at `path` (any form
     /// [`BagKind::of`] knows), named by their header stamps, the layout
     /// detected from the fields.
     pub fn open(path: &Path, topic: &str) -> Result<Self> {

@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::bag_topics::{check_type, TopicFrames};
+use super::bag_message::check_type;
+use super::bag_topics::TopicFrames;
 use super::mcap_file::read_mcap;
 use crate::cloud::Frame;
 use crate::{Error, Result};
@@ -121,8 +122,10 @@ impl Metadata {
         list.join(", ")
     }
 
-    /// An error naming `path` unless `topic` is listed as a CDR
-    /// `PointCloud2` (nothing is checked when no topic is listed).
+    /// An error naming `path` unless `topic` is listed as a CDR point
+    /// cloud of a supported type (`PointCloud2` or a Livox `CustomMsg`,
+    /// [`MessageKind`](super::bag_message::MessageKind); nothing is
+    /// checked when no topic is listed).
     fn check_topic(&self, path: &Path, topic: &str) -> Result<()> {
         if self.topics_with_message_count.is_empty() {
             return Ok(());
@@ -137,7 +140,8 @@ impl Metadata {
                 topic,
                 &t.topic_metadata.kind,
                 &t.topic_metadata.serialization_format,
-            ),
+            )
+            .map(|_| ()),
             None => Err(Error::format(
                 path,
                 format!("no topic {topic}; topics: {}", self.topic_list()),

@@ -1,6 +1,6 @@
 //! Bags written byte by byte as drivers write them: MCAP and rosbag2
-//! sqlite3 files of CDR `PointCloud2` messages, point records laid out
-//! field by field.
+//! sqlite3 files of CDR `PointCloud2` messages (or of another type, the
+//! `_as` writers), point records laid out field by field.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -13,11 +13,15 @@ pub type Message = (&'static str, u64, Vec<u8>);
 
 /// An MCAP bag of `messages` (one channel per topic).
 pub fn write_mcap(path: &Path, messages: &[Message]) {
+    write_mcap_as(path, POINTCLOUD2, POINTCLOUD2_SCHEMA, messages);
+}
+
+/// An MCAP bag of `messages` of type `kind` (its `ros2msg` schema text
+/// `schema`), one channel per topic.
+pub fn write_mcap_as(path: &Path, kind: &str, schema: &str, messages: &[Message]) {
     let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
     let mut w = mcap::Writer::new(file).unwrap();
-    let schema = w
-        .add_schema(POINTCLOUD2, "ros2msg", POINTCLOUD2_SCHEMA.as_bytes())
-        .unwrap();
+    let schema = w.add_schema(kind, "ros2msg", schema.as_bytes()).unwrap();
     let mut channels = BTreeMap::new();
     for (k, (topic, t, data)) in messages.iter().enumerate() {
         let channel = *channels.entry(*topic).or_insert_with(|| {
@@ -37,6 +41,11 @@ pub fn write_mcap(path: &Path, messages: &[Message]) {
 
 /// A rosbag2 sqlite3 file of `messages`.
 pub fn write_db3(path: &Path, messages: &[Message]) {
+    write_db3_as(path, POINTCLOUD2, messages);
+}
+
+/// A rosbag2 sqlite3 file of `messages` whose topics are of type `kind`.
+pub fn write_db3_as(path: &Path, kind: &str, messages: &[Message]) {
     let db = rusqlite::Connection::open(path).unwrap();
     db.execute_batch(
         "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
@@ -51,7 +60,7 @@ pub fn write_db3(path: &Path, messages: &[Message]) {
         let id = *ids.entry(*topic).or_insert_with(|| {
             db.execute(
                 "INSERT INTO topics VALUES (?1, ?2, ?3, 'cdr', '')",
-                rusqlite::params![next, topic, POINTCLOUD2],
+                rusqlite::params![next, topic, kind],
             )
             .unwrap();
             next

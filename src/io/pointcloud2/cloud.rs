@@ -4,49 +4,7 @@
 
 use std::fmt::Write as _;
 
-/// A little-endian CDR reader (alignment relative to the payload start).
-struct Cdr<'a> {
-    buf: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Cdr<'a> {
-    fn new(data: &'a [u8]) -> Result<Self, String> {
-        match data.get(..4) {
-            Some([0, 1, _, _]) => Ok(Self {
-                buf: &data[4..],
-                pos: 0,
-            }),
-            Some([0, 0, _, _]) => Err("big-endian CDR is not supported".into()),
-            _ => Err("not a CDR message (bad encapsulation header)".into()),
-        }
-    }
-
-    fn take(&mut self, n: usize, align: usize) -> Result<&'a [u8], String> {
-        self.pos = self.pos.div_ceil(align) * align;
-        let end = self.pos.checked_add(n).filter(|&e| e <= self.buf.len());
-        let end = end.ok_or_else(|| "message is truncated".to_string())?;
-        let s = &self.buf[self.pos..end];
-        self.pos = end;
-        Ok(s)
-    }
-
-    fn u8(&mut self) -> Result<u8, String> {
-        Ok(self.take(1, 1)?[0])
-    }
-
-    fn u32(&mut self) -> Result<u32, String> {
-        let b = self.take(4, 4)?;
-        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    }
-
-    fn string(&mut self) -> Result<String, String> {
-        let n = self.u32()? as usize;
-        let b = self.take(n, 1)?;
-        let b = b.strip_suffix(&[0]).unwrap_or(b);
-        Ok(String::from_utf8_lossy(b).into_owned())
-    }
-}
+use crate::io::cdr::CdrReader;
 
 /// One field of a point record: where it is and its `sensor_msgs/PointField`
 /// datatype (1 INT8, 2 UINT8, 3 INT16, 4 UINT16, 5 INT32, 6 UINT32,
@@ -117,7 +75,7 @@ impl<'a> Cloud<'a> {
     /// inconsistent message (a field beyond the record, records beyond the
     /// data, an unknown datatype, big-endian data).
     pub fn parse(data: &'a [u8]) -> Result<Self, String> {
-        let mut c = Cdr::new(data)?;
+        let mut c = CdrReader::new(data)?;
         let sec = c.u32()? as i32;
         let nanosec = c.u32()?;
         let _frame_id = c.string()?;

@@ -16,6 +16,10 @@
 //! | livox (livox_ros_driver2, livox_ros2_driver) | `x y z intensity tag line` | `tag` bits 5:4 | `line` | `timestamp`, absolute ns (when present) |
 //! | hesai (HesaiLidar_ROS_2.0) | `x y z intensity ring timestamp` | inferred: two consecutive points of a ring at one azimuth are one firing's two echoes, the nearer is 1 | `ring` | `timestamp`, absolute s |
 //! | nebula (tier4) | `x y z intensity return_type channel` | `return_type` | `channel` | `time_stamp`, ns from scan start |
+//!
+//! The Livox drivers' other message, `CustomMsg` (`xfer_format = 1`), is
+//! not a `PointCloud2`; [`crate::io::livox_custom`] reads it with the same
+//! return rule ([`livox_tag_return`]).
 
 use crate::cloud::Point;
 
@@ -349,9 +353,18 @@ impl FieldMapping for LivoxLayout {
     }
 }
 
-/// The return of a Livox `tag`: bits 5:4 hold the echo number.
+/// The return of a Livox `tag` field's value ([`livox_tag_return`]).
 fn livox_return(tag: f64) -> u8 {
-    if (tag as u8 >> 4) & 3 >= 2 {
+    livox_tag_return(tag as u8)
+}
+
+/// specular's return of a Livox `tag` byte, for the `PointCloud2` layout
+/// ([`LivoxLayout`]) and the `CustomMsg` ([`crate::io::livox_custom`])
+/// alike: bits 5:4 hold the echo number; 0 (an echo merged with the
+/// window's, a target nearer than about 1.5 m) and 1 are return 1, 2 and
+/// 3 are return 2 (a later echo of the same pulse).
+pub fn livox_tag_return(tag: u8) -> u8 {
+    if (tag >> 4) & 3 >= 2 {
         2
     } else {
         1

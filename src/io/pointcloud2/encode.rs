@@ -4,6 +4,7 @@
 //! as each driver writes them).
 
 use crate::cloud::Frame;
+use crate::io::cdr::CdrWriter;
 
 /// A `PointCloud2` given as its parts: what [`RawCloud::encode`] writes.
 #[derive(Debug, Clone, PartialEq)]
@@ -50,11 +51,9 @@ impl RawCloud<'_> {
         w.u32(self.point_step);
         w.u32(self.point_step * self.width);
         w.u32(self.data.len() as u32);
-        w.buf.extend_from_slice(self.data);
+        w.bytes(self.data);
         w.u8(self.is_dense as u8);
-        let mut out = vec![0, 1, 0, 0];
-        out.extend_from_slice(&w.buf);
-        out
+        w.finish()
     }
 }
 
@@ -106,30 +105,4 @@ pub fn encode_pointcloud2(frame: &Frame, frame_id: &str) -> Vec<u8> {
         is_dense: true,
     }
     .encode()
-}
-
-/// A little-endian CDR writer (alignment relative to the payload start).
-#[derive(Default)]
-struct CdrWriter {
-    buf: Vec<u8>,
-}
-
-impl CdrWriter {
-    fn align(&mut self, a: usize) {
-        while !self.buf.len().is_multiple_of(a) {
-            self.buf.push(0);
-        }
-    }
-    fn u8(&mut self, v: u8) {
-        self.buf.push(v);
-    }
-    fn u32(&mut self, v: u32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-    fn string(&mut self, s: &str) {
-        self.u32(s.len() as u32 + 1);
-        self.buf.extend_from_slice(s.as_bytes());
-        self.buf.push(0);
-    }
 }
