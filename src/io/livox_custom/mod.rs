@@ -58,7 +58,7 @@
 //! * ring = `line`; no label.
 //!
 //! Points not finite or at the origin are set aside and counted as every
-//! reader does ([`set_aside_non_returns`]).
+//! reader does ([`set_aside_non_returns`](crate::cloud::set_aside_non_returns)).
 
 pub mod message;
 
@@ -66,7 +66,7 @@ pub use message::{CustomMsg, CustomPoint, POINT_BYTES, POINT_STRIDE};
 
 use super::pointcloud2::drivers::livox_tag_return;
 use super::pointcloud2::{Decoded, Driver};
-use crate::cloud::{set_aside_non_returns, Frame, Point};
+use crate::cloud::{Frame, Point};
 
 /// livox_ros2_driver's message type (the Avia's ROS 2 driver).
 pub const LIVOX_INTERFACES_CUSTOM_MSG: &str = "livox_interfaces/msg/CustomMsg";
@@ -100,7 +100,7 @@ pub fn custom_msg_schema(kind: &str) -> String {
 /// says where a damaged message ends.
 pub fn decode_custom_msg(data: &[u8]) -> Result<Decoded, String> {
     let msg = CustomMsg::parse(data)?;
-    let mut points: Vec<Point> = msg
+    let points: Vec<Point> = msg
         .points
         .iter()
         .map(|p| Point {
@@ -112,23 +112,14 @@ pub fn decode_custom_msg(data: &[u8]) -> Result<Decoded, String> {
             time: msg.time_of(p),
         })
         .collect();
-    let aside = set_aside_non_returns(&mut points);
-    let stamp = msg.sec as f64 + msg.nanosec as f64 * 1e-9;
-    let frame = Frame {
-        name: format!("{stamp:.6}"),
-        stamp,
+    let shape = (1, points.len());
+    Ok(Decoded::assemble(
         points,
-        has_labels: false,
-        dropped_non_finite: aside.len(),
-        intensity_scale: None,
-    };
-    Ok(Decoded {
-        frame,
-        aside,
-        shape: (1, msg.points.len()),
-        stamp: (msg.sec, msg.nanosec),
-        driver: Driver::Livox,
-    })
+        false,
+        shape,
+        (msg.sec, msg.nanosec),
+        Driver::Livox,
+    ))
 }
 
 /// The `tag` of a point of return `ret`: the echo number in bits 5:4 (1,

@@ -65,22 +65,45 @@ pub fn decode(data: &[u8], driver: Option<Driver>, ret: u8) -> Result<Decoded, S
     let mut points: Vec<Point> = Vec::with_capacity(cloud.len());
     points.extend(cloud.records().map(|rec| reader.point(rec, stamp, ret)));
     mapping.finish(&cloud, &mut points)?;
-    let aside = set_aside_non_returns(&mut points);
-    let frame = Frame {
-        name: format!("{stamp:.6}"),
-        stamp,
+    Ok(Decoded::assemble(
         points,
-        has_labels: cloud.has("label"),
-        dropped_non_finite: aside.len(),
-        intensity_scale: None,
-    };
-    Ok(Decoded {
-        frame,
-        aside,
-        shape: (cloud.height, cloud.width),
-        stamp: (cloud.sec, cloud.nanosec),
+        cloud.has("label"),
+        (cloud.height, cloud.width),
+        (cloud.sec, cloud.nanosec),
         driver,
-    })
+    ))
+}
+
+impl Decoded {
+    /// A message's decoded `points` (in message order) as a frame named
+    /// after the header `stamp`, the points that are no return set aside
+    /// ([`set_aside_non_returns`]): what every message type's decoder
+    /// ends with.
+    pub(crate) fn assemble(
+        mut points: Vec<Point>,
+        has_labels: bool,
+        shape: (usize, usize),
+        stamp: (i32, u32),
+        driver: Driver,
+    ) -> Self {
+        let aside = set_aside_non_returns(&mut points);
+        let seconds = stamp.0 as f64 + stamp.1 as f64 * 1e-9;
+        let frame = Frame {
+            name: format!("{seconds:.6}"),
+            stamp: seconds,
+            points,
+            has_labels,
+            dropped_non_finite: aside.len(),
+            intensity_scale: None,
+        };
+        Decoded {
+            frame,
+            aside,
+            shape,
+            stamp,
+            driver,
+        }
+    }
 }
 
 /// Decode one CDR `sensor_msgs/msg/PointCloud2` into a frame, its layout
