@@ -125,11 +125,7 @@ mod tests {
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         let frame = corner_frame(&sensor);
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
-        let f = EvidenceFrame {
-            frame: &frame,
-            scan: &scan,
-            pose: Isometry3::identity(),
-        };
+        let f = EvidenceFrame::new(&frame, &scan, Isometry3::identity(), &sensor);
         let window = BoundedPlane::from_points(
             Plane::new(Vector3::new(0.0, -1.0, 0.0), 3.0).unwrap(),
             [(-1.5, -1.0), (2.0, -1.0), (2.0, 1.5), (-1.5, 1.5)]

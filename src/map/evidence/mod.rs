@@ -27,7 +27,7 @@ mod tests;
 mod votes;
 
 pub use crossings::{open_where_crossed, passed_through, path_crossings};
-use votes::{sum_glass_echoes, vote_frame, IntensityCounts, Votes};
+use votes::{sum_glass_echoes, vote_frame, EchoAtIncidence, IntensityCounts, Votes};
 
 use std::collections::BTreeMap;
 
@@ -39,7 +39,7 @@ use crate::cloud::Frame;
 use crate::geometry::fit::PlaneSums;
 use crate::geometry::grid::EvidenceGrid;
 use crate::reflect::BoundedPlane;
-use crate::sensor::OrganizedScan;
+use crate::sensor::{OrganizedScan, SensorModel};
 
 /// Settings of the evidence grid: `[map.evidence]` sets the cell, the
 /// margin and the votes a cell needs; the rest are the method's constants,
@@ -68,9 +68,15 @@ pub struct EvidenceParams {
     /// Single echoes within this angle of normal incidence cast no vote
     /// (glass echoes peak there), degrees.
     pub peak_angle_deg: f64,
-    /// Whether a weak single echo on the plane votes "glass". Off by default:
-    /// where the infinite plane cuts the floor, ceiling or a wall at a
-    /// grazing angle, those surfaces return weak echoes "on the plane" too.
+    /// Whether a single echo on the plane that is no stronger than the
+    /// landmark's glass echoes met at the same incidence votes "glass"
+    /// ([`GLASS_ECHO_QUANTILE`]): where a pane's transmitted beams find
+    /// nothing behind it (the sky above a facade), its glass answers with
+    /// single echoes only. Compared by strength (range-corrected) within an
+    /// incidence bin, because the floor, ceiling or a wall where the
+    /// infinite plane cuts them also return echoes "on the plane", weaker
+    /// than the glass's bright near-normal echoes but stronger than its
+    /// faint oblique ones.
     pub weak_single_echo_votes: bool,
     /// A transparent region with fewer surface echoes than this share of its
     /// transparent votes is an opening, not glass.
@@ -184,7 +190,9 @@ impl EvidenceParams {
     /// a return within 0.1 m of the crossing is on the plane, 0.1 m beyond
     /// it behind; passes vote within 0.15 m of the hull; a single echo 3
     /// times brighter than the median glass echo is opaque, one within 5
-    /// deg of normal incidence casts no vote, a weak one no "glass" vote;
+    /// deg of normal incidence casts no vote, a weaker one votes "glass"
+    /// where it is no stronger than the landmark's glass echoes at its
+    /// incidence;
     /// a transparent region returning fewer than 1 surface echo in 200
     /// passes is an opening, and so are transparent cells more than 1 m
     /// from any glass echo and edge cells echoing less than a tenth of the
@@ -207,7 +215,7 @@ impl EvidenceParams {
         pass_margin: 0.15,
         opaque_intensity_ratio: 3.0,
         peak_angle_deg: 5.0,
-        weak_single_echo_votes: false,
+        weak_single_echo_votes: true,
         min_echo_fraction: 0.005,
         echo_reach: 1.0,
         echo_deficit_ratio: 0.1,
@@ -240,6 +248,7 @@ impl EvidenceParams {
         crossing_radius: 0.0,
         direct_only: false,
         refit_plane: false,
+        weak_single_echo_votes: false,
         ..Self::METHOD
     };
 }
@@ -260,7 +269,50 @@ pub struct EvidenceFrame<'a> {
     pub scan: &'a OrganizedScan,
     /// `T_world_sensor`.
     pub pose: Isometry3<f64>,
+    /// The range exponent of the frame's echo strengths
+    /// ([`IntensityScale::range_exponent`](crate::cloud::IntensityScale::range_exponent)).
+    pub range_exponent: f64,
 }
+
+impl<'a> EvidenceFrame<'a> {
+    /// Frame `frame` of `sensor` at `pose`, its strengths on the scale the
+    /// frame declares, else the sensor's.
+    pub fn new(
+        frame: &'a Frame,
+        scan: &'a OrganizedScan,
+        pose: Isometry3<f64>,
+        sensor: &SensorModel,
+    ) -> Self {
+        Self {
+            frame,
+            scan,
+            pose,
+            range_exponent: frame
+                .intensity_scale
+                .unwrap_or(sensor.intensity)
+                .range_exponent(),
+        }
+    }
+}
+
+/// A single echo votes "glass" ([`EvidenceParams::weak_single_echo_votes`])
+/// when its strength is at most this quantile of the landmark's glass
+/// echoes in its incidence bin: the glass echoes' upper tail (dirt, a
+/// brighter pane) still counts, a wall's typical echo does not.
+pub const GLASS_ECHO_QUANTILE: f64 = 0.9;
+
+/// Fewest glass echoes an incidence bin needs before single echoes there
+/// are compared with them.
+pub const MIN_GLASS_ECHOES_PER_BIN: u64 = 30;
+
+/// Single echoes are compared with the glass echoes of an incidence bin
+/// only where those (up to [`GLASS_ECHO_QUANTILE`]) are at least this much
+/// weaker than the median return behind them, decades: glass answers a
+/// few per cent and passes most of the rest, so its echo is much weaker
+/// than what lies behind it, while a surface with a strong diffuse echo
+/// (a glossy panel) is as strong as a wall, and weak single echoes on it
+/// say nothing.
+pub const GLASS_BELOW_BEHIND_DECADES: f64 = 0.5;
 
 /// Evidence for `landmark` (world frame) over `frames`; `None` when the
 /// landmark has no usable boundary extent.
@@ -309,8 +361,13 @@ pub struct EvidenceTotal {
     params: EvidenceParams,
     /// Intensities of surface echoes with a return behind the plane.
     glass_echoes: IntensityCounts,
-    /// Single echoes on the plane: count per (cell, intensity bits).
-    single_echoes: BTreeMap<(usize, u32), u32>,
+    /// Their strengths per incidence bin, and those of the returns behind
+    /// them.
+    glass_strengths: EchoAtIncidence,
+    behind_strengths: EchoAtIncidence,
+    /// Single echoes on the plane: count per (cell, intensity bits,
+    /// incidence bin, strength bits).
+    single_echoes: BTreeMap<(usize, u32, u8, u32), u32>,
 }
 
 impl EvidenceGatherer {
@@ -437,6 +494,8 @@ impl EvidenceGatherer {
             grid: self.empty.clone(),
             params: self.params,
             glass_echoes: IntensityCounts::default(),
+            glass_strengths: Default::default(),
+            behind_strengths: Default::default(),
             single_echoes: BTreeMap::new(),
         }
     }
@@ -449,11 +508,15 @@ impl EvidenceTotal {
         for x in v.votes.glass_echo_intensity {
             self.glass_echoes.add(x);
         }
-        for (uv, intensity) in v.votes.single_echoes {
+        for (bin, strength, behind) in v.votes.glass_echo_strength {
+            self.glass_strengths[bin as usize].add(strength);
+            self.behind_strengths[bin as usize].add(behind);
+        }
+        for (uv, intensity, bin, strength) in v.votes.single_echoes {
             if let Some(k) = self.grid.index(&uv) {
                 *self
                     .single_echoes
-                    .entry((k, intensity.to_bits()))
+                    .entry((k, intensity.to_bits(), bin, strength.to_bits()))
                     .or_insert(0) += 1;
             }
         }
@@ -465,21 +528,35 @@ impl EvidenceTotal {
             mut grid,
             params,
             glass_echoes,
+            glass_strengths,
+            behind_strengths,
             single_echoes,
         } = self;
         // Single echoes on the plane: opaque when brighter than the
-        // landmark's glass echoes by the ratio, glass otherwise (all opaque
-        // when the landmark has no dual-return glass echo to compare with).
+        // landmark's glass echoes by the ratio (all opaque when the
+        // landmark has no dual-return glass echo to compare with); glass
+        // when no stronger than its glass echoes at the same incidence.
+        let glass_at: Vec<Option<f64>> = glass_strengths
+            .iter()
+            .zip(&behind_strengths)
+            .map(|(glass, behind)| {
+                let upper = glass.quantile(GLASS_ECHO_QUANTILE)?;
+                let weak = upper + GLASS_BELOW_BEHIND_DECADES <= behind.median()?;
+                (glass.len() >= MIN_GLASS_ECHOES_PER_BIN && weak).then_some(upper)
+            })
+            .collect();
         let glass_median = glass_echoes.median();
         grid.glass_echo_intensity = glass_median.map(|m| m as f32);
         let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);
         grid.opaque_intensity = threshold.map(|t| t as f32);
         grid.peak_cos = params.peak_angle_deg.to_radians().cos();
-        for ((k, bits), n) in single_echoes {
+        for ((k, bits, bin, strength), n) in single_echoes {
             let intensity = f32::from_bits(bits);
             match threshold {
                 Some(th) if (intensity as f64) <= th => {
-                    if params.weak_single_echo_votes {
+                    let like_glass = glass_at[bin as usize]
+                        .is_some_and(|g| f32::from_bits(strength) as f64 <= g);
+                    if params.weak_single_echo_votes && like_glass {
                         grid.vote_echo_at(k, n)
                     }
                 }

@@ -59,11 +59,7 @@ fn where_the_sensor_crossed_the_plane_it_is_open() {
     let frame = pane_frame(&sensor);
     let scan = OrganizedScan::build(&frame, &sensor).unwrap();
     let mut pane = pane_landmark();
-    let f = EvidenceFrame {
-        frame: &frame,
-        scan: &scan,
-        pose: Isometry3::identity(),
-    };
+    let f = EvidenceFrame::new(&frame, &scan, Isometry3::identity(), &sensor);
     let params = EvidenceParams::BARE;
     let evidence = gather_evidence(&pane, &[f], &params).unwrap();
     pane.evidence = Some(std::sync::Arc::new(evidence));
@@ -110,11 +106,7 @@ fn bare_passes_near_normal_incidence_are_an_opening() {
     }
     let scan = OrganizedScan::build(&frame, &sensor).unwrap();
     let pane = pane_landmark();
-    let f = EvidenceFrame {
-        frame: &frame,
-        scan: &scan,
-        pose: Isometry3::identity(),
-    };
+    let f = EvidenceFrame::new(&frame, &scan, Isometry3::identity(), &sensor);
     let off = EvidenceParams::BARE;
     let on = EvidenceParams {
         bare_pass_max_deg: 10.0,
@@ -152,11 +144,7 @@ fn echoes_of_a_surface_crossing_the_plane_are_not_its_glass() {
     let corners = [(4.0, -1.0), (6.0, -1.0), (6.0, 1.0), (4.0, 1.0)];
     let landmark =
         BoundedPlane::from_points(plane, corners.iter().map(|&(x, z)| Point3::new(x, y0, z)));
-    let f = EvidenceFrame {
-        frame: &frame,
-        scan: &scan,
-        pose: Isometry3::identity(),
-    };
+    let f = EvidenceFrame::new(&frame, &scan, Isometry3::identity(), &sensor);
     let off = EvidenceParams::BARE;
     let on = EvidenceParams {
         echo_normal_max_deg: 45.0,
@@ -205,11 +193,7 @@ fn a_plane_off_its_glass_echoes_is_refitted_onto_them() {
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     let frame = pane_frame(&sensor);
     let scan = OrganizedScan::build(&frame, &sensor).unwrap();
-    let f = EvidenceFrame {
-        frame: &frame,
-        scan: &scan,
-        pose: Isometry3::identity(),
-    };
+    let f = EvidenceFrame::new(&frame, &scan, Isometry3::identity(), &sensor);
     let turn = Rotation3::from_axis_angle(&Vector3::z_axis(), 1f64.to_radians());
     let off =
         Plane::from_point_normal(&Point3::new(5.03, 0.0, 0.0), &(turn * -Vector3::x())).unwrap();
@@ -245,4 +229,72 @@ fn a_plane_off_its_glass_echoes_is_refitted_onto_them() {
         ..on
     };
     assert_eq!(refit(&few), None);
+}
+
+/// A single echo on the plane votes "glass" where it is no stronger than
+/// the landmark's glass echoes met at the same incidence, and those are
+/// much weaker than what lies behind them (a pane above the sky); not
+/// where it is stronger (a wall strip), not at an incidence no glass echo
+/// was met at, and not at all when the landmark's echoes are as strong as
+/// what lies behind them (a glossy panel, whose neighbouring walls are no
+/// stronger than its echoes).
+#[test]
+fn weak_single_echoes_vote_glass_only_against_weak_glass_echoes_at_their_incidence() {
+    let params = EvidenceParams::METHOD;
+    let gatherer = EvidenceGatherer::new(&pane_landmark(), &params).unwrap();
+    let (glass_at, wall_at, elsewhere) = (
+        Point2::new(-1.0, 0.0),
+        Point2::new(0.0, 0.5),
+        Point2::new(-0.5, -0.8),
+    );
+    let votes_with_behind = |behind: f32| {
+        let mut votes = Votes::default();
+        for _ in 0..100 {
+            votes.glass_echo_intensity.push(10.0);
+            votes.glass_echo_strength.push((3, 1.0, behind));
+        }
+        for _ in 0..5 {
+            votes.single_echoes.push((glass_at, 5.0, 3, 1.0));
+            votes.single_echoes.push((wall_at, 5.0, 3, 2.0));
+            votes.single_echoes.push((elsewhere, 5.0, 6, 0.5));
+        }
+        let mut total = gatherer.total();
+        total.add(FrameVotes {
+            grid: gatherer.empty.empty_like(),
+            votes,
+        });
+        total.finish()
+    };
+    let weak_glass = votes_with_behind(3.0);
+    assert_eq!(weak_glass.echoes_near(&glass_at, 0.0), 5);
+    assert_eq!(weak_glass.echoes_near(&wall_at, 0.0), 0);
+    assert_eq!(weak_glass.echoes_near(&elsewhere, 0.0), 0);
+    let glossy = votes_with_behind(1.2);
+    assert_eq!(glossy.echoes_near(&glass_at, 0.0), 0);
+    let off = EvidenceParams {
+        weak_single_echo_votes: false,
+        ..params
+    };
+    let gatherer = EvidenceGatherer::new(&pane_landmark(), &off).unwrap();
+    let mut votes = Votes::default();
+    votes.glass_echo_intensity.push(10.0);
+    votes.single_echoes.push((glass_at, 5.0, 3, 1.0));
+    let mut total = gatherer.total();
+    total.add(FrameVotes {
+        grid: gatherer.empty.empty_like(),
+        votes,
+    });
+    assert_eq!(total.finish().echoes_near(&glass_at, 0.0), 0);
+}
+
+/// The incidence bins are 10 degrees wide, the last holding everything
+/// from 80 degrees on, whichever side the beam meets the plane from.
+#[test]
+fn incidence_bins_are_ten_degrees_wide() {
+    use super::votes::incidence_bin;
+    assert_eq!(incidence_bin(1.0), 0);
+    assert_eq!(incidence_bin(-1.0), 0);
+    assert_eq!(incidence_bin(35f64.to_radians().cos()), 3);
+    assert_eq!(incidence_bin(-35f64.to_radians().cos()), 3);
+    assert_eq!(incidence_bin(0.0), 8);
 }

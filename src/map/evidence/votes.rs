@@ -18,8 +18,33 @@ use crate::reflect::BoundedPlane;
 pub(super) struct Votes {
     /// Intensities of surface echoes with a return behind the plane.
     pub(super) glass_echo_intensity: Vec<f32>,
-    /// Single echoes on the plane: chart position and intensity.
-    pub(super) single_echoes: Vec<(Point2<f64>, f32)>,
+    /// The same echoes' incidence bins and strengths, with the strength
+    /// of the return behind each ([`EchoAtIncidence`]).
+    pub(super) glass_echo_strength: Vec<(u8, f32, f32)>,
+    /// Single echoes on the plane: chart position, intensity, incidence bin
+    /// and strength.
+    pub(super) single_echoes: Vec<(Point2<f64>, f32, u8, f32)>,
+}
+
+/// Width of the incidence bins in which a single echo's strength is
+/// compared with the landmark's glass echoes, degrees: a glass echo's
+/// strength falls steeply away from normal incidence (a specular peak and
+/// a faint diffuse lobe), a wall's does not, so they are compared at the
+/// same incidence.
+pub(super) const INCIDENCE_BIN_DEG: f64 = 10.0;
+
+/// The incidence bin of a beam meeting the plane at cosine `cos`.
+pub(super) fn incidence_bin(cos: f64) -> u8 {
+    let deg = cos.abs().clamp(0.0, 1.0).acos().to_degrees();
+    (deg / INCIDENCE_BIN_DEG).floor().min(8.0) as u8
+}
+
+/// The strength of an echo on the plane, `log10(I · t^k)` with `t` the
+/// range of the crossing ([`echo_strength`](crate::reflect::echo_split::echo_strength)
+/// without the Lambertian incidence term: glass is not Lambertian, and
+/// echoes are compared within one incidence bin).
+fn strength_on_plane(intensity: f32, t: f64, range_exponent: f64) -> f32 {
+    crate::reflect::echo_split::echo_strength(intensity, t, range_exponent, 1.0) as f32
 }
 
 /// A multiset of intensities, counted per distinct value: its median is
@@ -31,6 +56,10 @@ pub(super) struct IntensityCounts {
     len: u64,
 }
 
+/// Glass echo strengths per incidence bin ([`incidence_bin`]), exact
+/// counts like [`IntensityCounts`].
+pub(super) type EchoAtIncidence = [IntensityCounts; 9];
+
 impl IntensityCounts {
     pub(super) fn add(&mut self, x: f32) {
         *self.counts.entry(total_order_key(x)).or_insert(0) += 1;
@@ -40,15 +69,26 @@ impl IntensityCounts {
     /// The value at position `len / 2` in sorted order (the upper median
     /// for an even count), `None` when empty.
     pub(super) fn median(&self) -> Option<f64> {
-        let mid = self.len / 2;
+        self.quantile(0.5)
+    }
+
+    /// The value at position `floor(len · q)` in sorted order (`q` in
+    /// [0, 1)), `None` when empty.
+    pub(super) fn quantile(&self, q: f64) -> Option<f64> {
+        let at = ((self.len as f64 * q).floor() as u64).min(self.len.saturating_sub(1));
         let mut seen = 0;
         for (&key, &n) in &self.counts {
             seen += n;
-            if seen > mid {
+            if seen > at {
                 return Some(from_total_order_key(key) as f64);
             }
         }
         None
+    }
+
+    /// Number of values.
+    pub(super) fn len(&self) -> u64 {
+        self.len
     }
 }
 
@@ -216,14 +256,26 @@ pub(super) fn vote_frame(
             match f.scan.partner(i) {
                 // The beam ended on the plane.
                 None => {
-                    if plane.plane.normal.dot(&c.dir).abs() < cos_peak {
-                        votes.single_echoes.push((c.uv, pt.intensity));
+                    let cos = plane.plane.normal.dot(&c.dir);
+                    if cos.abs() < cos_peak {
+                        votes.single_echoes.push((
+                            c.uv,
+                            pt.intensity,
+                            incidence_bin(cos),
+                            strength_on_plane(pt.intensity, c.t, f.range_exponent),
+                        ));
                     }
                 }
                 Some(j) => {
                     if tests.is_glass_echo(i, j, &c) {
                         grid.vote_echo(&c.uv);
                         votes.glass_echo_intensity.push(pt.intensity);
+                        let behind = &f.frame.points[j];
+                        votes.glass_echo_strength.push((
+                            incidence_bin(plane.plane.normal.dot(&c.dir)),
+                            strength_on_plane(pt.intensity, c.t, f.range_exponent),
+                            strength_on_plane(behind.intensity, behind.range(), f.range_exponent),
+                        ));
                     }
                 }
             }
@@ -292,6 +344,24 @@ mod tests {
                 counts.add(x);
             }
             prop_assert_eq!(counts.median(), median_of_all(&mut all));
+        }
+
+        /// A counted quantile is the value at its position among all of
+        /// them, sorted.
+        #[test]
+        fn counted_quantile_is_the_quantile_of_all(
+            all in proptest::collection::vec(-5.0f32..300.0, 1..200),
+            q in 0.0f64..1.0,
+        ) {
+            let mut counts = IntensityCounts::default();
+            for &x in &all {
+                counts.add(x);
+            }
+            let mut sorted = all.clone();
+            sorted.sort_by(|a, b| a.total_cmp(b));
+            let at = ((all.len() as f64 * q).floor() as usize).min(all.len() - 1);
+            prop_assert_eq!(counts.quantile(q), Some(sorted[at] as f64));
+            prop_assert_eq!(counts.len(), all.len() as u64);
         }
 
         /// The order key sorts like `f32::total_cmp` and round-trips.

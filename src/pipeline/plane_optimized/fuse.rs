@@ -247,11 +247,7 @@ fn per_landmark_pass<T: Send, A>(
             let mut t = StageTimings::default();
             let scan = sequence.timed_scan(k, frame, sensor, &mut t)?;
             let start = Instant::now();
-            let f = EvidenceFrame {
-                frame,
-                scan: &scan,
-                pose: poses[k],
-            };
+            let f = EvidenceFrame::new(frame, &scan, poses[k], sensor);
             let per_landmark: Vec<Option<T>> = gatherers
                 .iter()
                 .map(|g| g.as_ref().map(|g| read(g, &f)))
