@@ -67,17 +67,24 @@ pub(crate) fn beam_test(
                             .evidence
                             .as_ref()
                             .and_then(|e| e.glass_echo_intensity);
-                        if single
-                            && cos.abs() < oblique_cos
-                            && glass_echo.is_none_or(|m| pt.intensity > m)
-                        {
+                        // Stronger than the plane's glass echoes met at
+                        // the same incidence, where they tell; else than
+                        // their median.
+                        let brighter = || {
+                            bounded[k]
+                                .evidence
+                                .as_ref()
+                                .and_then(|e| e.stronger_than_glass(pt.intensity, t, cos))
+                                .unwrap_or_else(|| glass_echo.is_none_or(|m| pt.intensity > m))
+                        };
+                        if single && cos.abs() < oblique_cos && brighter() {
                             return Beam::Oblique;
                         }
                         match &bounded[k].evidence {
                             Some(e)
                                 if params.wall_echo_test
                                     && single
-                                    && e.is_opaque_echo(pt.intensity, cos) =>
+                                    && e.is_opaque_echo(pt.intensity, t, cos) =>
                             {
                                 Beam::WallEcho
                             }

@@ -17,6 +17,32 @@ pub enum Surface {
     Unknown,
 }
 
+/// Number of incidence bins ([`incidence_bin`]).
+pub const INCIDENCE_BINS: usize = 9;
+
+/// Width of the incidence bins in which echoes on a plane are compared
+/// with its glass echoes, degrees: a glass echo's strength falls steeply
+/// away from normal incidence (a specular peak and a faint diffuse lobe), a
+/// wall's does not, so they are compared at the same incidence.
+pub const INCIDENCE_BIN_DEG: f64 = 10.0;
+
+/// The incidence bin of a beam meeting a plane at cosine `cos` (either
+/// side), the last holding everything from 80 degrees on.
+pub fn incidence_bin(cos: f64) -> u8 {
+    let deg = cos.abs().clamp(0.0, 1.0).acos().to_degrees();
+    (deg / INCIDENCE_BIN_DEG)
+        .floor()
+        .min((INCIDENCE_BINS - 1) as f64) as u8
+}
+
+/// The strength of an echo on a plane, `log10(I · r^k)`: the echo strength
+/// of `reflect::echo_split` without its Lambertian incidence term (glass is
+/// not Lambertian; echoes on a plane are compared within one incidence
+/// bin).
+pub fn strength_on_plane(intensity: f32, range: f64, range_exponent: f64) -> f64 {
+    (intensity.max(0.5) as f64).log10() + range_exponent * range.max(1e-3).log10()
+}
+
 /// Transparent and opaque vote counts on a regular grid in a plane chart.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EvidenceGrid {
@@ -83,6 +109,15 @@ pub struct EvidenceGrid {
     /// Echoes within this cosine of normal incidence are exempt from the
     /// intensity test (glass peaks there like a wall).
     pub peak_cos: f64,
+    /// Per incidence bin ([`incidence_bin`]), the strongest strength
+    /// (`log10(I · r^k)`, a high quantile) of the plane's glass echoes met
+    /// there, where they are many and clearly weaker than the returns
+    /// behind them: a single echo stronger than that is from an opaque
+    /// surface, a weaker one may be the glass. `None`: no such reference
+    /// at that incidence.
+    pub glass_strength_at: [Option<f32>; INCIDENCE_BINS],
+    /// The range exponent `k` of those strengths.
+    pub range_exponent: f64,
     /// Cell states computed by [`EvidenceGrid::finalize`] (empty before).
     states: Vec<Surface>,
     /// Per cell, whether glass could be there unseen
@@ -129,6 +164,8 @@ impl EvidenceGrid {
             opaque_intensity: None,
             glass_echo_intensity: None,
             peak_cos: 1.0,
+            glass_strength_at: [None; INCIDENCE_BINS],
+            range_exponent: 0.0,
             states: Vec::new(),
             may_hide_glass: Vec::new(),
         })
@@ -376,10 +413,32 @@ impl EvidenceGrid {
     }
 
     /// Whether a single echo with this intensity, met at this cosine of
-    /// incidence, is too bright for the plane's glass: an opaque surface.
-    pub fn is_opaque_echo(&self, intensity: f32, cos_incidence: f64) -> bool {
-        self.opaque_intensity
-            .is_some_and(|th| intensity > th && cos_incidence.abs() < self.peak_cos)
+    /// incidence and `range` metres, is too bright for the plane's glass: an
+    /// opaque surface. Outside the near-normal peak: stronger than the
+    /// plane's glass echoes at the same incidence where they tell
+    /// ([`glass_strength_at`](Self::glass_strength_at)), else brighter than
+    /// [`opaque_intensity`](Self::opaque_intensity).
+    pub fn is_opaque_echo(&self, intensity: f32, range: f64, cos_incidence: f64) -> bool {
+        if cos_incidence.abs() >= self.peak_cos {
+            return false;
+        }
+        match self.stronger_than_glass(intensity, range, cos_incidence) {
+            Some(stronger) => stronger,
+            None => self.opaque_intensity.is_some_and(|th| intensity > th),
+        }
+    }
+
+    /// Whether an echo of this intensity at `range` metres, met at this
+    /// cosine of incidence, is stronger than the plane's glass echoes met
+    /// at the same incidence; `None` where they give no reference.
+    pub fn stronger_than_glass(
+        &self,
+        intensity: f32,
+        range: f64,
+        cos_incidence: f64,
+    ) -> Option<bool> {
+        let reference = self.glass_strength_at[incidence_bin(cos_incidence) as usize]?;
+        Some(strength_on_plane(intensity, range, self.range_exponent) > reference as f64)
     }
 
     /// Surface echoes (glass echoes) counted in the cells within `reach`

@@ -199,3 +199,31 @@ fn a_transparent_region_almost_without_echoes_is_open() {
         );
     }
 }
+
+/// A single echo away from the near-normal peak is opaque when stronger
+/// than the plane's glass echoes at its incidence (range-corrected, so a
+/// far wall's faint echo is still a wall), and by the intensity threshold
+/// only where no glass echo was met at that incidence; within the peak it
+/// never is.
+#[test]
+fn an_echo_is_opaque_when_stronger_than_the_glass_at_its_incidence() {
+    let mut g =
+        EvidenceGrid::new(Point2::new(0.0, 0.0), Point2::new(1.0, 1.0), 0.2, 1, 100).unwrap();
+    g.peak_cos = 5f64.to_radians().cos();
+    g.opaque_intensity = Some(30.0);
+    g.range_exponent = 2.0;
+    // Glass echoes at 30-40 degrees reach strength 2 (intensity 1 at 10 m).
+    g.glass_strength_at[3] = Some(2.0);
+    let at = |deg: f64| deg.to_radians().cos();
+    // 35 degrees: intensity 1 at 20 m is strength 2.6 (a far wall), 5 at
+    // 4 m is 1.9 (glass), though 5 is far below the intensity threshold.
+    assert!(g.is_opaque_echo(1.0, 20.0, at(35.0)));
+    assert!(!g.is_opaque_echo(5.0, 4.0, at(35.0)));
+    assert_eq!(g.stronger_than_glass(5.0, 4.0, at(35.0)), Some(false));
+    // 55 degrees: no glass reference, the intensity threshold decides.
+    assert_eq!(g.stronger_than_glass(50.0, 4.0, at(55.0)), None);
+    assert!(g.is_opaque_echo(50.0, 4.0, at(55.0)));
+    assert!(!g.is_opaque_echo(20.0, 40.0, at(55.0)));
+    // Within the peak nothing is opaque.
+    assert!(!g.is_opaque_echo(1000.0, 4.0, at(2.0)));
+}

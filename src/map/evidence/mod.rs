@@ -365,6 +365,8 @@ pub struct EvidenceTotal {
     /// them.
     glass_strengths: EchoAtIncidence,
     behind_strengths: EchoAtIncidence,
+    /// The range exponent of the strengths (frames share one scale).
+    range_exponent: f64,
     /// Single echoes on the plane: count per (cell, intensity bits,
     /// incidence bin, strength bits).
     single_echoes: BTreeMap<(usize, u32, u8, u32), u32>,
@@ -496,6 +498,7 @@ impl EvidenceGatherer {
             glass_echoes: IntensityCounts::default(),
             glass_strengths: Default::default(),
             behind_strengths: Default::default(),
+            range_exponent: 0.0,
             single_echoes: BTreeMap::new(),
         }
     }
@@ -508,6 +511,7 @@ impl EvidenceTotal {
         for x in v.votes.glass_echo_intensity {
             self.glass_echoes.add(x);
         }
+        self.range_exponent = v.votes.range_exponent;
         for (bin, strength, behind) in v.votes.glass_echo_strength {
             self.glass_strengths[bin as usize].add(strength);
             self.behind_strengths[bin as usize].add(behind);
@@ -530,6 +534,7 @@ impl EvidenceTotal {
             glass_echoes,
             glass_strengths,
             behind_strengths,
+            range_exponent,
             single_echoes,
         } = self;
         // Single echoes on the plane: opaque when brighter than the
@@ -545,6 +550,8 @@ impl EvidenceTotal {
                 (glass.len() >= MIN_GLASS_ECHOES_PER_BIN && weak).then_some(upper)
             })
             .collect();
+        grid.glass_strength_at = std::array::from_fn(|b| glass_at[b].map(|g| g as f32));
+        grid.range_exponent = range_exponent;
         let glass_median = glass_echoes.median();
         grid.glass_echo_intensity = glass_median.map(|m| m as f32);
         let threshold = glass_median.map(|m| m * params.opaque_intensity_ratio);

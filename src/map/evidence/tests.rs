@@ -291,7 +291,7 @@ fn weak_single_echoes_vote_glass_only_against_weak_glass_echoes_at_their_inciden
 /// from 80 degrees on, whichever side the beam meets the plane from.
 #[test]
 fn incidence_bins_are_ten_degrees_wide() {
-    use super::votes::incidence_bin;
+    use crate::geometry::grid::incidence_bin;
     assert_eq!(incidence_bin(1.0), 0);
     assert_eq!(incidence_bin(-1.0), 0);
     assert_eq!(incidence_bin(35f64.to_radians().cos()), 3);

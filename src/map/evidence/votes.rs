@@ -9,7 +9,7 @@ use nalgebra::{Point2, Point3, Vector3};
 
 use super::{EvidenceFrame, EvidenceParams};
 use crate::geometry::fit::PlaneSums;
-use crate::geometry::grid::EvidenceGrid;
+use crate::geometry::grid::{incidence_bin, strength_on_plane, EvidenceGrid, INCIDENCE_BINS};
 use crate::map::direct::passed_another;
 use crate::reflect::BoundedPlane;
 
@@ -24,27 +24,8 @@ pub(super) struct Votes {
     /// Single echoes on the plane: chart position, intensity, incidence bin
     /// and strength.
     pub(super) single_echoes: Vec<(Point2<f64>, f32, u8, f32)>,
-}
-
-/// Width of the incidence bins in which a single echo's strength is
-/// compared with the landmark's glass echoes, degrees: a glass echo's
-/// strength falls steeply away from normal incidence (a specular peak and
-/// a faint diffuse lobe), a wall's does not, so they are compared at the
-/// same incidence.
-pub(super) const INCIDENCE_BIN_DEG: f64 = 10.0;
-
-/// The incidence bin of a beam meeting the plane at cosine `cos`.
-pub(super) fn incidence_bin(cos: f64) -> u8 {
-    let deg = cos.abs().clamp(0.0, 1.0).acos().to_degrees();
-    (deg / INCIDENCE_BIN_DEG).floor().min(8.0) as u8
-}
-
-/// The strength of an echo on the plane, `log10(I · t^k)` with `t` the
-/// range of the crossing ([`echo_strength`](crate::reflect::echo_split::echo_strength)
-/// without the Lambertian incidence term: glass is not Lambertian, and
-/// echoes are compared within one incidence bin).
-fn strength_on_plane(intensity: f32, t: f64, range_exponent: f64) -> f32 {
-    crate::reflect::echo_split::echo_strength(intensity, t, range_exponent, 1.0) as f32
+    /// The range exponent of the strengths (the frame's).
+    pub(super) range_exponent: f64,
 }
 
 /// A multiset of intensities, counted per distinct value: its median is
@@ -56,9 +37,9 @@ pub(super) struct IntensityCounts {
     len: u64,
 }
 
-/// Glass echo strengths per incidence bin ([`incidence_bin`]), exact
+/// Glass echo strengths per incidence bin ([`incidence_bin`](crate::geometry::grid::incidence_bin)), exact
 /// counts like [`IntensityCounts`].
-pub(super) type EchoAtIncidence = [IntensityCounts; 9];
+pub(super) type EchoAtIncidence = [IntensityCounts; INCIDENCE_BINS];
 
 impl IntensityCounts {
     pub(super) fn add(&mut self, x: f32) {
@@ -228,7 +209,10 @@ pub(super) fn vote_frame(
     let tests = PlaneTests::new(plane, others, f, p);
     let cos_peak = p.peak_angle_deg.to_radians().cos();
     let bare_cos = (p.bare_pass_max_deg > 0.0).then(|| p.bare_pass_max_deg.to_radians().cos());
-    let mut votes = Votes::default();
+    let mut votes = Votes {
+        range_exponent: f.range_exponent,
+        ..Votes::default()
+    };
     for (i, pt) in f.frame.points.iter().enumerate() {
         let Some(c) = tests.crossing(pt.position(), grid) else {
             continue;
@@ -262,7 +246,7 @@ pub(super) fn vote_frame(
                             c.uv,
                             pt.intensity,
                             incidence_bin(cos),
-                            strength_on_plane(pt.intensity, c.t, f.range_exponent),
+                            strength_on_plane(pt.intensity, c.t, f.range_exponent) as f32,
                         ));
                     }
                 }
@@ -273,8 +257,9 @@ pub(super) fn vote_frame(
                         let behind = &f.frame.points[j];
                         votes.glass_echo_strength.push((
                             incidence_bin(plane.plane.normal.dot(&c.dir)),
-                            strength_on_plane(pt.intensity, c.t, f.range_exponent),
-                            strength_on_plane(behind.intensity, behind.range(), f.range_exponent),
+                            strength_on_plane(pt.intensity, c.t, f.range_exponent) as f32,
+                            strength_on_plane(behind.intensity, behind.range(), f.range_exponent)
+                                as f32,
                         ));
                     }
                 }
