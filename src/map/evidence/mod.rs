@@ -62,8 +62,11 @@ pub struct EvidenceParams {
     /// of the landmark's hull (beyond it they may cross open space); surface
     /// echoes vote anywhere on the grid, m.
     pub pass_margin: f64,
-    /// A single echo on the plane brighter than this many times the median
-    /// glass echo is opaque (wall-like); a dimmer one is glass.
+    /// A single echo on the plane stronger than the landmark's glass echoes
+    /// met at the same incidence is opaque (wall-like)
+    /// ([`EvidenceGrid::is_opaque_echo`]); where no glass echo was met at
+    /// that incidence, one brighter than this many times the median glass
+    /// echo is.
     pub opaque_intensity_ratio: f64,
     /// Single echoes within this angle of normal incidence cast no vote
     /// (glass echoes peak there), degrees.
@@ -559,15 +562,17 @@ impl EvidenceTotal {
         grid.peak_cos = params.peak_angle_deg.to_radians().cos();
         for ((k, bits, bin, strength), n) in single_echoes {
             let intensity = f32::from_bits(bits);
-            match threshold {
-                Some(th) if (intensity as f64) <= th => {
-                    let like_glass = glass_at[bin as usize]
-                        .is_some_and(|g| f32::from_bits(strength) as f64 <= g);
-                    if params.weak_single_echo_votes && like_glass {
-                        grid.vote_echo_at(k, n)
-                    }
-                }
-                _ => grid.vote_at(k, 0, n),
+            let strength = f32::from_bits(strength) as f64;
+            // Against the glass echoes at the same incidence where they
+            // tell, else against their median intensity.
+            let opaque = match glass_at[bin as usize] {
+                Some(g) => strength > g,
+                None => threshold.is_none_or(|th| intensity as f64 > th),
+            };
+            if opaque {
+                grid.vote_at(k, 0, n);
+            } else if params.weak_single_echo_votes && glass_at[bin as usize].is_some() {
+                grid.vote_echo_at(k, n);
             }
         }
         grid.finalize();
