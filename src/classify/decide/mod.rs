@@ -145,12 +145,15 @@ pub struct DecisionParams {
     pub dual_gap: f64,
     /// Class given to behind-plane points no evidence decides.
     pub ambiguous: Class,
-    /// A single echo on a reflective plane that is brighter than the plane's
-    /// glass echoes (see the evidence grid) is an opaque surface (Normal).
+    /// A single echo on a reflective plane that is stronger than the plane's
+    /// glass echoes met at the same incidence (see the evidence grid,
+    /// [`EvidenceGrid::is_opaque_echo`](crate::geometry::grid::EvidenceGrid::is_opaque_echo))
+    /// is an opaque surface (Normal).
     pub wall_echo_test: bool,
     /// A single echo on a reflective plane met more than this many degrees
-    /// from the plane's normal, and brighter than the plane's typical glass
-    /// echo, is an opaque surface (a mullion, a sill, a wall strip): glass
+    /// from the plane's normal, and stronger than the plane's glass echoes
+    /// met at the same incidence (where none was, brighter than their
+    /// median), is an opaque surface (a mullion, a sill, a wall strip): glass
     /// returns a weak echo of its own away from normal incidence, and a
     /// beam through glass usually brings back a second return from behind
     /// (0: off).
