@@ -37,7 +37,7 @@ pub(super) struct IntensityCounts {
     len: u64,
 }
 
-/// Glass echo strengths per incidence bin ([`incidence_bin`](crate::geometry::grid::incidence_bin)), exact
+/// Glass echo strengths per incidence bin ([`incidence_bin`]), exact
 /// counts like [`IntensityCounts`].
 pub(super) type EchoAtIncidence = [IntensityCounts; INCIDENCE_BINS];
 
