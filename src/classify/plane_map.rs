@@ -249,8 +249,10 @@ impl PlaneMapClassifier {
     /// [`FrameInput::beam_hits`] to run it only once per frame.
     pub fn beam_hits(&self, input: &FrameInput<'_>) -> BeamHits {
         let planes = Self::planes_in_sensor_frame(input);
-        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin)
-            .with_unseen_extent(self.params.decision.unseen_extent);
+        let beams = BeamPlanes::hulls(&planes, self.params.hull_margin).with_unseen_extent(
+            self.params.decision.unseen_extent,
+            self.params.decision.unseen_extent_beside,
+        );
         BeamHits::compute(
             input.frame,
             input.scan,

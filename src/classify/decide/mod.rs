@@ -190,17 +190,27 @@ pub struct DecisionParams {
     /// glass (glass doors and partitions seen through one another), while
     /// the geometric tests say nothing past a second pane.
     pub echo_strength_past_second_pane: bool,
-    /// A reflective landmark may continue as glass up to this far beyond
-    /// its seen extent, where its evidence calls the plane neither opaque
-    /// nor open, m (0: off). Glass echoes only near normal incidence, so
-    /// the top of a tall pane above the sensor gives none and its extent
-    /// ends short. A point whose beam crossed that continuation is tested
-    /// like a point behind glass, but only by the evidence of the whole
+    /// A reflective landmark may continue as glass up to this far above
+    /// and below its seen extent (up and down its plane), where its
+    /// evidence calls the plane neither opaque nor open, m (0: off). Glass
+    /// echoes only near normal incidence, and a sensor carried past a wall
+    /// meets it so only near its own height: the top of a tall pane gives
+    /// none and its extent ends short. A double-height facade (the atrium
+    /// family's, glass to 6.5 m) echoes up to about 3 m, and its glass goes
+    /// on for 3 to 4 m more (`docs/decision.md`, "Glass past its last
+    /// echo"). A point whose beam crossed that continuation is tested like
+    /// a point behind glass, but only by the evidence of the whole
     /// sequence: a Reflection where its real position is refuted, or where
     /// its mirror image lands on a seen surface and no surface was seen
     /// where it was measured; Normal otherwise. The space seen directly
     /// takes no surface from such beams.
     pub unseen_extent: f64,
+    /// How far the same continuation reaches beside the seen extent
+    /// (along the plane's horizontal), m: the sensor met the plane head-on
+    /// where it passed, so beside a pane glass hides only at the ends of
+    /// what it passed; and a small reflective plane (a screen on a desk)
+    /// does not continue over the desk.
+    pub unseen_extent_beside: f64,
     /// A beam that crossed a landmark's extent within this distance of its
     /// edge may have passed beside it, m (0: off): the panes are fitted on
     /// the evidence grid's 0.2 m cells and overreach by up to about half a
@@ -261,6 +271,7 @@ impl DecisionParams {
         seen_surface_echo_reach: 0.0,
         echo_strength_past_second_pane: false,
         unseen_extent: 0.0,
+        unseen_extent_beside: 0.0,
         pane_edge_margin: 0.0,
         perpendicular_support_deg: 0.0,
     };
@@ -304,7 +315,8 @@ impl DecisionParams {
         seen_surface_test: true,
         seen_surface_echo_reach: 0.6,
         echo_strength_past_second_pane: true,
-        unseen_extent: 1.0,
+        unseen_extent: 4.0,
+        unseen_extent_beside: 1.0,
         pane_edge_margin: 0.15,
         perpendicular_support_deg: 0.0,
     };

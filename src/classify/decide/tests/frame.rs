@@ -260,6 +260,7 @@ fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_support
             support_test: true,
             support_radius: 0.3,
             unseen_extent,
+            unseen_extent_beside: unseen_extent,
             ..rule_only(false)
         };
         decide_in(&points, 50.0, planes, &params, &SpaceMap::new(0.1, 2, 1))
@@ -284,6 +285,37 @@ fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_support
     planes[0].evidence = Some(std::sync::Arc::new(grid));
     let d = run(&planes, 1.0);
     assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
+}
+
+/// Glass continues unseen farther above and below a pane than beside it:
+/// the sensor met the plane head-on where it passed. The point of the test
+/// above, moved so that its beam crosses the plane 0.3 m beside the pane
+/// (at the pane's height) instead of above it, is behind unseen glass only
+/// where the continuation beside reaches that far, however far it reaches
+/// above.
+#[test]
+fn a_point_beside_the_seen_extent_needs_the_reach_beside() {
+    // Behind the plane at (6, 2.76, 0.5): its beam crosses x = 5 at
+    // y = 2.3, beside the pane (y up to 2). Its mirror image (4, 2.76, 0.5)
+    // is a surface the frame saw.
+    let points = [[6.0f32, 2.76, 0.5], [4.0, 2.76, 0.5]];
+    let run = |unseen_extent_beside: f64| {
+        let params = DecisionParams {
+            support_test: true,
+            support_radius: 0.3,
+            unseen_extent: 4.0,
+            unseen_extent_beside,
+            ..rule_only(false)
+        };
+        decide_in(&points, 50.0, &pane(), &params, &SpaceMap::new(0.1, 2, 1))
+    };
+    let d = run(0.25);
+    assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
+    let d = run(1.0);
+    assert_eq!(
+        (d.classes[0], d.rules[0]),
+        (Class::Reflection, Rule::PastSeenExtent)
+    );
 }
 
 /// Past the seen extent the sequence's space decides too: where the point

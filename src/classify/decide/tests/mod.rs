@@ -106,7 +106,8 @@ fn decide_in(
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     let f = frame(points, intensity);
     let scan = OrganizedScan::build(&f, &sensor).unwrap();
-    let beams = BeamPlanes::hulls(planes, 0.0).with_unseen_extent(params.unseen_extent);
+    let beams = BeamPlanes::hulls(planes, 0.0)
+        .with_unseen_extent(params.unseen_extent, params.unseen_extent_beside);
     let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
     let view = space.in_sensor_frame(Isometry3::identity());
     decide_with_hits(&f, &scan, &sensor, planes, &hits, params, None, Some(&view))
