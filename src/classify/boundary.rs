@@ -141,13 +141,14 @@ impl<'a> BeamPlanes<'a> {
     }
 
     /// Also answer [`BeamPlanes::first_unseen`]: crossings up to `reach`
-    /// above or below a plane's reflective extent (along its chart's `v`
-    /// axis, up and down a wall) and up to `beside` to either side of it
-    /// (along `u`), where the plane may be glass that no echo showed
+    /// above a plane's reflective extent (along its chart's `v` axis, up a
+    /// wall) and up to `beside` to either side of it and below it, where
+    /// the plane may be glass that no echo showed
     /// ([`BoundedPlane::beyond_seen_extent_2d`]; hull boundaries only, 0:
     /// none). A sensor carried past a wall meets it near normal incidence
-    /// only near its own height: a tall pane's top and foot give no echo,
-    /// while beside a pane it met the plane head-on where it passed.
+    /// only near its own height: a tall pane's top gives no echo, while
+    /// beside a pane it met the plane head-on where it passed, and below it
+    /// glass meets a floor or a parapet.
     pub fn with_unseen_extent(mut self, reach: f64, beside: f64) -> Self {
         if reach > 0.0 && self.windows.is_none() {
             self.unseen_reach = reach.max(beside);
@@ -158,7 +159,7 @@ impl<'a> BeamPlanes<'a> {
                     let (lo, hi) = bp.extent_2d(self.margin.max(0.0));
                     let side = beside.max(0.0);
                     (
-                        Point2::new(lo.x - side, lo.y - reach),
+                        Point2::new(lo.x - side, lo.y - side),
                         Point2::new(hi.x + side, hi.y + reach),
                     )
                 })

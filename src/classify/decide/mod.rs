@@ -191,7 +191,7 @@ pub struct DecisionParams {
     /// the geometric tests say nothing past a second pane.
     pub echo_strength_past_second_pane: bool,
     /// A reflective landmark may continue as glass up to this far above
-    /// and below its seen extent (up and down its plane), where its
+    /// its seen extent (up its plane), where its
     /// evidence calls the plane neither opaque nor open, m (0: off). Glass
     /// echoes only near normal incidence, and a sensor carried past a wall
     /// meets it so only near its own height: the top of a tall pane gives
@@ -205,11 +205,13 @@ pub struct DecisionParams {
     /// where it was measured; Normal otherwise. The space seen directly
     /// takes no surface from such beams.
     pub unseen_extent: f64,
-    /// How far the same continuation reaches beside the seen extent
-    /// (along the plane's horizontal), m: the sensor met the plane head-on
-    /// where it passed, so beside a pane glass hides only at the ends of
-    /// what it passed; and a small reflective plane (a screen on a desk)
-    /// does not continue over the desk.
+    /// How far the same continuation reaches beside and below the seen
+    /// extent, m: the sensor met the plane head-on where it passed, so
+    /// beside a pane glass hides only at the ends of what it passed (and a
+    /// small reflective plane, a screen on a desk, does not continue over
+    /// the desk); below, glass meets a floor or a parapet, and a beam
+    /// below a pane's foot is one the space seen directly needs (the
+    /// lobby's ghost landmark, `tests/plane_optimized.rs`).
     pub unseen_extent_beside: f64,
     /// A beam that crossed a landmark's extent within this distance of its
     /// edge may have passed beside it, m (0: off): the panes are fitted on

@@ -287,18 +287,24 @@ fn a_point_past_the_seen_extent_is_a_reflection_when_its_mirror_image_is_support
     assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
 }
 
-/// Glass continues unseen farther above and below a pane than beside it:
-/// the sensor met the plane head-on where it passed. The point of the test
-/// above, moved so that its beam crosses the plane 0.3 m beside the pane
-/// (at the pane's height) instead of above it, is behind unseen glass only
-/// where the continuation beside reaches that far, however far it reaches
-/// above.
+/// Glass continues unseen farther above a pane than beside or below it:
+/// the sensor met the plane head-on where it passed, and glass meets a
+/// floor or a parapet at its foot. The point of the test above, moved so
+/// that its beam crosses the plane 0.3 m beside the pane (at the pane's
+/// height) or 0.3 m below its foot, is behind unseen glass only where the
+/// reach beside and below goes that far, however far the reach above goes.
 #[test]
-fn a_point_beside_the_seen_extent_needs_the_reach_beside() {
+fn a_point_beside_or_below_the_seen_extent_needs_the_reach_beside() {
     // Behind the plane at (6, 2.76, 0.5): its beam crosses x = 5 at
-    // y = 2.3, beside the pane (y up to 2). Its mirror image (4, 2.76, 0.5)
-    // is a surface the frame saw.
-    let points = [[6.0f32, 2.76, 0.5], [4.0, 2.76, 0.5]];
+    // y = 2.3, beside the pane (y up to 2); at (6, 0, -1.56) it crosses at
+    // z = -1.3, below the pane's foot (z = -1). Their mirror images
+    // (x = 4) are surfaces the frame saw.
+    let points = [
+        [6.0f32, 2.76, 0.5],
+        [4.0, 2.76, 0.5],
+        [6.0, 0.0, -1.56],
+        [4.0, 0.0, -1.56],
+    ];
     let run = |unseen_extent_beside: f64| {
         let params = DecisionParams {
             support_test: true,
@@ -310,12 +316,16 @@ fn a_point_beside_the_seen_extent_needs_the_reach_beside() {
         decide_in(&points, 50.0, &pane(), &params, &SpaceMap::new(0.1, 2, 1))
     };
     let d = run(0.25);
-    assert_eq!((d.classes[0], d.rules[0]), (Class::Normal, Rule::NoPane));
+    for i in [0, 2] {
+        assert_eq!((d.classes[i], d.rules[i]), (Class::Normal, Rule::NoPane));
+    }
     let d = run(1.0);
-    assert_eq!(
-        (d.classes[0], d.rules[0]),
-        (Class::Reflection, Rule::PastSeenExtent)
-    );
+    for i in [0, 2] {
+        assert_eq!(
+            (d.classes[i], d.rules[i]),
+            (Class::Reflection, Rule::PastSeenExtent)
+        );
+    }
 }
 
 /// Past the seen extent the sequence's space decides too: where the point
