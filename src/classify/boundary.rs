@@ -151,13 +151,13 @@ impl<'a> BeamPlanes<'a> {
     /// glass meets a floor or a parapet.
     pub fn with_unseen_extent(mut self, reach: f64, beside: f64) -> Self {
         if reach > 0.0 && self.windows.is_none() {
-            self.unseen_reach = reach.max(beside);
+            let side = beside.max(0.0);
+            self.unseen_reach = reach.max(side);
             self.unseen_extents = self
                 .planes
                 .iter()
                 .map(|bp| {
                     let (lo, hi) = bp.extent_2d(self.margin.max(0.0));
-                    let side = beside.max(0.0);
                     (
                         Point2::new(lo.x - side, lo.y - side),
                         Point2::new(hi.x + side, hi.y + reach),

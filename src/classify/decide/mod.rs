@@ -191,8 +191,8 @@ pub struct DecisionParams {
     /// the geometric tests say nothing past a second pane.
     pub echo_strength_past_second_pane: bool,
     /// A reflective landmark may continue as glass up to this far above
-    /// its seen extent (up its plane), where its
-    /// evidence calls the plane neither opaque nor open, m (0: off). Glass
+    /// its seen extent (up its plane), where its evidence calls the plane
+    /// neither opaque nor open, m (0: off). Glass
     /// echoes only near normal incidence, and a sensor carried past a wall
     /// meets it so only near its own height: the top of a tall pane gives
     /// none and its extent ends short. A double-height facade (the atrium
@@ -280,10 +280,11 @@ impl DecisionParams {
 
     /// What the weighed classifier (`plane_map.decision_model = "weighed"`)
     /// takes from the decision procedure: its beam test (a single echo
-    /// brighter than the plane's glass echoes is wall; one beyond 30 deg
-    /// from the normal, brighter than its glass echoes, a mullion or sill;
-    /// glass may continue 1 m past its last echo; a point found real is an
-    /// Obstacle only with glass echoes within 0.6 m of its beam's crossing),
+    /// stronger than the plane's glass echoes at its incidence is wall; one
+    /// beyond 30 deg from the normal, stronger than them, a mullion or sill;
+    /// glass may continue 4 m above its last echo, 1 m beside and below
+    /// it; a point found real is an Obstacle only with glass echoes within
+    /// 0.6 m of its beam's crossing),
     /// the space seen directly from every pose (always tested), the
     /// sequence's surface support within 0.316 m (the paper's 0.1 m²
     /// squared radius) but not more than 0.2 m behind a seen surface, and a
