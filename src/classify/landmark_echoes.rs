@@ -1,16 +1,16 @@
 //! What one keyframe adds to each landmark's glass-or-mirror estimate
 //! ([`glass_or_mirror`](crate::map::glass_or_mirror())): the echoes behind
 //! it ([`BehindEchoes`]: which points count, which crossed it well inside
-//! its extent, which are anchors, which the seen space calls transmitted)
-//! and the strengths of the room's direct echoes. The pipeline sums these
-//! over the keyframes; the tests they rest on are the classifier's, so they
-//! live here.
+//! its extent, which are anchors, which the seen space calls transmitted or
+//! reflected) and the strengths of the room's direct echoes. The pipeline
+//! sums these over the keyframes; the tests they rest on are the
+//! classifier's, so they live here.
 
 use nalgebra::Point3;
 
 use super::boundary::BeamPlanes;
 use super::decide::{near_pane_edge, BeamHit, BeamHits, SurfaceSupport};
-use super::evidence::seen_space::CLEARANCE_RATIO;
+use super::evidence::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
 use super::plane_map::{PlaneMapClassifier, PlaneMapParams};
 use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
@@ -144,21 +144,37 @@ impl EchoCounting<'_> {
         if anchor {
             stats.anchors.add(strength);
         }
-        // Real where measured: its mirror image refuted by the seen space,
-        // its measured position not.
         let seen_space = &self.params.weighing.seen_space;
         let plane = &view.planes[h.plane].plane;
+        let tolerance = self.params.weighing.level_surface.tolerance;
         let x = Point3::from(pos.coords * (h.range / range));
         let refuted = |end: &Point3<f64>| {
             seen_space.refuted(view.space, view.seen, &plane.normal, &x, end, range)
         };
-        let transmitted = !near_edge && refuted(&mirrored) && !refuted(&pos);
-        if transmitted {
-            stats.transmitted.add(strength);
-            let tolerance = self.params.weighing.level_surface.tolerance;
-            if let Some(k) = view.space.level_of(&pos, tolerance) {
-                *stats.at_level(k) += 1;
+        if near_edge {
+            return;
+        }
+        if refuted(&mirrored) {
+            // Real where measured: its mirror image refuted by the seen
+            // space, its measured position not.
+            if !refuted(&pos) {
+                stats.transmitted.add(strength);
+                if let Some(k) = view.space.level_of(&pos, tolerance) {
+                    *stats.at_level(k) += 1;
+                }
             }
+            return;
+        }
+        // A reflection: its mirror image lies on a surface seen directly,
+        // where it was measured none was. Not at a floor or ceiling: a
+        // vertical pane mirrors the floor behind it onto the floor in front,
+        // real or not.
+        let imaged = view.space.level_of(&mirrored, tolerance).is_none()
+            && view.seen.is_some_and(|s| {
+                s.near(&mirrored, SUPPORT_RADIUS) && !s.near(&pos, SUPPORT_RADIUS)
+            });
+        if imaged {
+            stats.imaged += 1;
         }
     }
 }

@@ -66,6 +66,10 @@ pub struct PlaneRecord {
     /// landmark, where their strengths tell it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reflection_share: Option<f64>,
+    /// The share of reflections among the echoes behind it that the space
+    /// seen directly decided (the prior of a point no test weighs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decided_share: Option<f64>,
 }
 
 /// Write `planes.json` (atomically, pretty-printed).

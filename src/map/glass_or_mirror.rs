@@ -67,7 +67,10 @@ pub struct BehindEchoes {
     /// ... of those of `inside` that the seen space calls real where
     /// measured (confirmed transmissions).
     pub transmitted: EchoHistogram,
-    /// Of those, how many ended at each level (floor or ceiling) seen
+    /// How many of `inside` have a mirror image on a surface seen directly
+    /// and none where they were measured (confirmed reflections).
+    pub imaged: u64,
+    /// Of the confirmed transmissions, how many ended at each level (floor or ceiling) seen
     /// directly, by the level's index.
     pub transmitted_at_level: Vec<u64>,
 }
@@ -79,6 +82,7 @@ impl BehindEchoes {
         self.anchors.merge(&other.anchors);
         self.inside.merge(&other.inside);
         self.transmitted.merge(&other.transmitted);
+        self.imaged += other.imaged;
         for (k, &n) in other.transmitted_at_level.iter().enumerate() {
             *self.at_level(k) += n;
         }
@@ -135,6 +139,9 @@ pub struct GlassOrMirror {
     /// The share of reflections among its echoes, where their strengths
     /// tell it ([`StrengthMixture`]).
     pub reflection_share: Option<f64>,
+    /// The share of reflections among the echoes the seen space decides
+    /// ([`decided_share`]).
+    pub decided_share: Option<f64>,
 }
 
 /// The estimate for a landmark with echoes `behind`, given the strengths of
@@ -173,6 +180,7 @@ pub fn glass_or_mirror(
         transmission_llr,
         weak_echo_llr,
         reflection_share: StrengthMixture::fit(behind).map(|m| m.share),
+        decided_share: decided_share(behind),
     }
 }
 
@@ -206,6 +214,19 @@ fn physical_split(
         from_physics: true,
     })
 }
+
+/// The share of reflections among a landmark's echoes from those the seen
+/// space decides: confirmed reflections against confirmed transmissions
+/// (each beam's image or position seen or not is taken as independent of
+/// what it is), with one of each assumed before; `None` with fewer than
+/// [`MIN_DECIDED`] decided.
+pub fn decided_share(behind: &BehindEchoes) -> Option<f64> {
+    let (r, t) = (behind.imaged as f64, behind.transmitted.total() as f64);
+    (r + t >= MIN_DECIDED as f64).then(|| (r + 1.0) / (r + t + 2.0))
+}
+
+/// Decided echoes needed for [`decided_share`].
+pub const MIN_DECIDED: u64 = 100;
 
 /// Direct echoes needed to know the room's echo strengths.
 const MIN_DIRECT: u64 = 1000;
@@ -338,6 +359,28 @@ mod tests {
         };
         let t = glass_or_mirror(&seen_through, &direct, &split, &p, 2.0);
         assert!(t.mirror_probability < 0.1, "{t:?}");
+    }
+
+    /// Without a strength mixture, the share of reflections is that of the
+    /// echoes the seen space decided: confirmed reflections against
+    /// confirmed transmissions; too few decided give none.
+    #[test]
+    fn the_share_of_reflections_follows_the_decided_echoes() {
+        let direct = histogram((0..2000).map(|i| 3.0 + 0.0004 * i as f64));
+        let (split, p) = (EchoSplitParams::default(), MirrorParams::default());
+        let share = |imaged: u64, transmitted: usize| {
+            let behind = BehindEchoes {
+                transmitted: transmissions(transmitted),
+                imaged,
+                ..BehindEchoes::default()
+            };
+            glass_or_mirror(&behind, &direct, &split, &p, 2.0).decided_share
+        };
+        let mostly_real = share(8, 392).expect("400 decided");
+        assert!((mostly_real - 9.0 / 402.0).abs() < 1e-12, "{mostly_real}");
+        let mostly_reflected = share(300, 100).expect("400 decided");
+        assert!(mostly_reflected > 0.7, "{mostly_reflected}");
+        assert_eq!(share(10, 40), None);
     }
 
     /// `n` confirmed transmissions, all of one strength.

@@ -197,6 +197,7 @@ impl Landmark {
                 .unwrap_or_default(),
             mirror_probability: b.mirror_probability,
             reflection_share: b.reflection_share,
+            decided_share: b.decided_share,
         }
     }
 }

@@ -56,6 +56,11 @@ pub struct BoundedPlane {
     /// ([`reflection_share`](mod@crate::map::reflection_share)): the prior
     /// of every point behind it.
     pub reflection_share: Option<f64>,
+    /// The share of reflections among the echoes behind the plane that
+    /// the space seen directly decides
+    /// ([`glass_or_mirror`](mod@crate::map::glass_or_mirror)): the prior of
+    /// a point behind it that no test weighs.
+    pub decided_share: Option<f64>,
 }
 
 impl BoundedPlane {
@@ -78,6 +83,7 @@ impl BoundedPlane {
             mirror_probability: None,
             levels_behind: Vec::new(),
             reflection_share: None,
+            decided_share: None,
         }
     }
 
@@ -196,6 +202,7 @@ impl BoundedPlane {
             mirror_probability: self.mirror_probability,
             levels_behind: self.levels_behind.clone(),
             reflection_share: self.reflection_share,
+            decided_share: self.decided_share,
         }
     }
 

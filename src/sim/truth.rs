@@ -157,6 +157,7 @@ impl TruePlanes {
                     panes,
                     mirror_probability: None,
                     reflection_share: None,
+                    decided_share: None,
                 }
             })
             .collect()

@@ -72,6 +72,33 @@ fn the_landmark_prior_decides_without_evidence() {
     assert!(d.confidence[0] > 0.99, "{:?}", d.confidence);
 }
 
+/// Behind glass, a point that no test weighs takes the share of
+/// reflections the seen space decided among its landmark's echoes as its
+/// prior; a point a test weighs keeps the landmark's prior, and a share of
+/// the echoes' strengths takes precedence.
+#[test]
+fn an_untested_point_takes_the_decided_share() {
+    let point = [[5.5f32, 0.2, 0.3]];
+    let mut planes = pane();
+    planes[0].mirror_probability = Some(0.0);
+    planes[0].decided_share = Some(0.1);
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Obstacle]);
+    assert_eq!(d.rules, [Rule::Prior]);
+    assert!((d.confidence[0] - 0.9).abs() < 1e-6, "{:?}", d.confidence);
+    // A test that weighs, however little, leaves the prior at 0.5.
+    let nudged = only(&[]).with_test(Box::new(Always(0.1)));
+    assert_eq!(
+        weighed(&point, &planes, &nudged).classes,
+        [Class::Reflection]
+    );
+    // The strengths' share, where it exists, is the prior of every point.
+    planes[0].reflection_share = Some(0.8);
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert!((d.confidence[0] - 0.8).abs() < 1e-6, "{:?}", d.confidence);
+}
+
 /// The point's mirror image lands in the room, seen free: the seen-space
 /// test calls it real (an Obstacle, with the test's confidence), and a
 /// stronger custom test added from outside overrules it.

@@ -111,22 +111,43 @@ impl Weighing {
         p.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
     }
 
+    /// The prior of a point behind its own landmark that no test weighs,
+    /// where it differs from [`prior`](Self::prior): the share of
+    /// reflections among the landmark's echoes that the seen space decided,
+    /// where their strengths do not tell the share.
+    fn untested_prior(&self, point: &BehindPoint<'_>) -> Option<f64> {
+        let landmark = point.landmark;
+        let own = point.single_pane && landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
+        let share = landmark
+            .decided_share
+            .filter(|_| own && landmark.reflection_share.is_none())?;
+        Some(share.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR))
+    }
+
     /// The posterior of `point`.
     pub fn weigh(&self, point: &BehindPoint<'_>) -> Posterior {
-        let prior = self.prior(point);
-        let mut log_odds = (prior / (1.0 - prior)).ln();
+        let mut prior = self.prior(point);
+        let mut evidence = 0.0;
+        let mut weighed = false;
         let (mut best_for, mut best_against) = ((0.0, Rule::Undecided), (0.0, Rule::Undecided));
         for test in &self.tests {
             let Some(llr) = test.weigh(point).filter(|l| l.is_finite()) else {
                 continue;
             };
-            log_odds += llr;
+            weighed |= llr != 0.0;
+            evidence += llr;
             if llr > best_for.0 {
                 best_for = (llr, test.rule());
             } else if -llr > best_against.0 {
                 best_against = (-llr, test.rule());
             }
         }
+        if !weighed {
+            if let Some(share) = self.untested_prior(point) {
+                prior = share;
+            }
+        }
+        let log_odds = (prior / (1.0 - prior)).ln() + evidence;
         let reflection = 1.0 / (1.0 + (-log_odds).exp());
         let rule = match (reflection > 0.5, best_for.1, best_against.1) {
             (true, Rule::Undecided, _) | (false, _, Rule::Undecided) => Rule::Prior,

@@ -125,6 +125,7 @@ impl<'a> FrameViews<'a> {
                     }),
                     levels_behind,
                     reflection_share: estimate.reflection_share,
+                    decided_share: estimate.decided_share,
                     ..bp.clone()
                 })
                 .collect(),

@@ -62,7 +62,8 @@ pub struct PlaneOptimizedOutput {
 impl PlaneOptimizedOutput {
     /// One line per landmark whose glass-or-mirror probability was
     /// estimated, with the share of reflections behind it where the echo
-    /// strengths tell it (the prior of every point behind it).
+    /// strengths tell it (the prior of every point behind it), else where
+    /// the seen space decides it (the prior of points no test weighs).
     pub fn mirror_lines(&self) -> Vec<String> {
         self.used
             .iter()
@@ -71,9 +72,16 @@ impl PlaneOptimizedOutput {
                 let p = bp.mirror_probability?;
                 let id = self.map.landmarks.get(i).map_or(i, |l| l.id);
                 let kind = if p > 0.5 { "mirror" } else { "glass" };
-                let share = bp.reflection_share.map_or(String::new(), |r| {
-                    format!("; reflections {:.0} % of the echoes behind it", 100.0 * r)
-                });
+                let share = match (bp.reflection_share, bp.decided_share) {
+                    (Some(r), _) => {
+                        format!("; reflections {:.0} % of the echoes behind it", 100.0 * r)
+                    }
+                    (None, Some(r)) => format!(
+                        "; reflections {:.0} % of the echoes behind it the seen space decides",
+                        100.0 * r
+                    ),
+                    _ => String::new(),
+                };
                 Some(format!(
                     "landmark {id}: {kind} (P(mirror) = {p:.3}, from its echoes{share})"
                 ))
