@@ -95,7 +95,8 @@ impl Weighing {
     /// The probability that `point` is a reflection before any test: the
     /// share of reflections among its landmark's echoes where their
     /// strengths tell it; else its landmark a mirror (then it is one), or
-    /// glass (then the prior).
+    /// glass (then the prior). A point no test weighs may take the decided
+    /// share instead ([`weigh`](Self::weigh)).
     pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
         let beside = !point.landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
         let own = !beside && point.single_pane;
