@@ -144,6 +144,9 @@ impl EchoCounting<'_> {
         if anchor {
             stats.anchors.add(strength);
         }
+        if near_edge {
+            return;
+        }
         let seen_space = &self.params.weighing.seen_space;
         let plane = &view.planes[h.plane].plane;
         let tolerance = self.params.weighing.level_surface.tolerance;
@@ -151,9 +154,6 @@ impl EchoCounting<'_> {
         let refuted = |end: &Point3<f64>| {
             seen_space.refuted(view.space, view.seen, &plane.normal, &x, end, range)
         };
-        if near_edge {
-            return;
-        }
         if refuted(&mirrored) {
             // Real where measured: its mirror image refuted by the seen
             // space, its measured position not.

@@ -70,8 +70,8 @@ pub struct BehindEchoes {
     /// How many of `inside` have a mirror image on a surface seen directly
     /// and none where they were measured (confirmed reflections).
     pub imaged: u64,
-    /// Of the confirmed transmissions, how many ended at each level (floor or ceiling) seen
-    /// directly, by the level's index.
+    /// Of the confirmed transmissions, how many ended at each level (floor
+    /// or ceiling) seen directly, by the level's index.
     pub transmitted_at_level: Vec<u64>,
 }
 

@@ -98,36 +98,33 @@ impl Weighing {
     /// glass (then the prior). A point no test weighs may take the decided
     /// share instead ([`weigh`](Self::weigh)).
     pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
-        let beside = !point.landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
+        self.prior_given(point, true)
+    }
+
+    /// [`prior`](Self::prior), but for a point behind its own glass that no
+    /// test weighed (`weighed` false): the share of reflections among the
+    /// landmark's echoes that the seen space decided, where their strengths
+    /// do not tell the share.
+    fn prior_given(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
+        let landmark = point.landmark;
+        let beside = !landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
         let own = !beside && point.single_pane;
-        let share = point.landmark.reflection_share;
-        let p = match (own, share) {
+        let p = match (own, landmark.reflection_share) {
             (true, Some(share)) => share,
-            (true, None) => {
-                let mirror = point.landmark.mirror_probability.unwrap_or(0.0);
-                mirror + (1.0 - mirror) * self.reflection_prior
-            }
+            (true, None) => match landmark.decided_share.filter(|_| !weighed) {
+                Some(decided) => decided,
+                None => {
+                    let mirror = landmark.mirror_probability.unwrap_or(0.0);
+                    mirror + (1.0 - mirror) * self.reflection_prior
+                }
+            },
             (false, _) => self.reflection_prior,
         };
         p.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
     }
 
-    /// The prior of a point behind its own landmark that no test weighs,
-    /// where it differs from [`prior`](Self::prior): the share of
-    /// reflections among the landmark's echoes that the seen space decided,
-    /// where their strengths do not tell the share.
-    fn untested_prior(&self, point: &BehindPoint<'_>) -> Option<f64> {
-        let landmark = point.landmark;
-        let own = point.single_pane && landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
-        let share = landmark
-            .decided_share
-            .filter(|_| own && landmark.reflection_share.is_none())?;
-        Some(share.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR))
-    }
-
     /// The posterior of `point`.
     pub fn weigh(&self, point: &BehindPoint<'_>) -> Posterior {
-        let mut prior = self.prior(point);
         let mut evidence = 0.0;
         let mut weighed = false;
         let (mut best_for, mut best_against) = ((0.0, Rule::Undecided), (0.0, Rule::Undecided));
@@ -143,11 +140,7 @@ impl Weighing {
                 best_against = (-llr, test.rule());
             }
         }
-        if !weighed {
-            if let Some(share) = self.untested_prior(point) {
-                prior = share;
-            }
-        }
+        let prior = self.prior_given(point, weighed);
         let log_odds = (prior / (1.0 - prior)).ln() + evidence;
         let reflection = 1.0 / (1.0 + (-log_odds).exp());
         let rule = match (reflection > 0.5, best_for.1, best_against.1) {
