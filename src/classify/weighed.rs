@@ -116,7 +116,7 @@ fn decide_point(
 ) -> (Class, f32, Rule) {
     let mut posterior = weighing.weigh(point);
     if point.past_extent {
-        posterior.reflection = unseen_posterior(posterior.reflection, weighing, point);
+        posterior.reflection = unseen_posterior(posterior.reflection, posterior.prior);
     }
     let p = posterior.reflection;
     let threshold = weighing.threshold();
@@ -149,12 +149,12 @@ fn decide_point(
 }
 
 /// The posterior of a point past a plane's seen extent: the weighing's
-/// posterior (which assumed glass) mixed with "no glass there" (then it is
-/// real), by the prior odds of glass continuing unseen.
-fn unseen_posterior(glass_posterior: f64, weighing: &Weighing, point: &BehindPoint<'_>) -> f64 {
+/// posterior `glass_posterior` (which assumed glass, from `prior`) mixed
+/// with "no glass there" (then it is real), by the prior odds of glass
+/// continuing unseen.
+fn unseen_posterior(glass_posterior: f64, prior: f64) -> f64 {
     // Bayes over the two explanations of the beam: glass there (the
     // weighing's likelihood ratio against its prior) or no glass (real).
-    let prior = weighing.prior(point);
     let odds = |p: f64| p / (1.0 - p).max(1e-12);
     let likelihood = odds(glass_posterior) / odds(prior);
     let r = UNSEEN_GLASS * prior * likelihood;

@@ -18,6 +18,9 @@ pub struct Posterior {
     pub reflection: f64,
     /// What decided it.
     pub rule: Rule,
+    /// P(Reflection) before the evidence, as weighed: a posterior past a
+    /// plane's seen extent mixes the evidence against this prior.
+    pub prior: f64,
 }
 
 /// The tests a classifier weighs, with the prior's parameters.
@@ -94,18 +97,11 @@ impl Weighing {
 
     /// The probability that `point` is a reflection before any test: the
     /// share of reflections among its landmark's echoes where their
-    /// strengths tell it; else its landmark a mirror (then it is one), or
-    /// glass (then the prior). A point no test weighs may take the decided
-    /// share instead ([`weigh`](Self::weigh)).
-    pub fn prior(&self, point: &BehindPoint<'_>) -> f64 {
-        self.prior_given(point, true)
-    }
-
-    /// [`prior`](Self::prior), but for a point behind its own glass that no
-    /// test weighed (`weighed` false): the share of reflections among the
-    /// landmark's echoes that the seen space decided, where their strengths
-    /// do not tell the share.
-    fn prior_given(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
+    /// strengths tell it; else, for a point behind its own glass that no
+    /// test weighed (`weighed` false), the share of reflections among the
+    /// landmark's echoes that the seen space decided; else its landmark a
+    /// mirror (then it is one), or glass (then the prior).
+    fn prior(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
         let landmark = point.landmark;
         let beside = !landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
         let own = !beside && point.single_pane;
@@ -140,14 +136,18 @@ impl Weighing {
                 best_against = (-llr, test.rule());
             }
         }
-        let prior = self.prior_given(point, weighed);
+        let prior = self.prior(point, weighed);
         let log_odds = (prior / (1.0 - prior)).ln() + evidence;
         let reflection = 1.0 / (1.0 + (-log_odds).exp());
         let rule = match (reflection > 0.5, best_for.1, best_against.1) {
             (true, Rule::Undecided, _) | (false, _, Rule::Undecided) => Rule::Prior,
             (true, rule, _) | (false, _, rule) => rule,
         };
-        Posterior { reflection, rule }
+        Posterior {
+            reflection,
+            rule,
+            prior,
+        }
     }
 }
 
