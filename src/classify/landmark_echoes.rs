@@ -80,19 +80,30 @@ impl EchoCounting<'_> {
             match hits.get(i, &pos, &planes) {
                 Some(h) => self.count_behind(&view, i, h, &mut behind[h.plane]),
                 // One column in four is plenty for the room's echoes.
-                None if i % 4 == 0 => direct.add(self.strength(input, i, pos.coords.norm())),
+                None if i % 4 == 0 => {
+                    direct.add(self.strength(input, i, &pos, &space));
+                }
                 None => {}
             }
         }
         (behind, direct)
     }
 
-    /// The echo strength of `input`'s point `i` at `range`.
-    fn strength(&self, input: &FrameInput<'_>, i: usize, range: f64) -> f64 {
-        let cos = self.split.incidence_cos(input.scan, input.frame, i);
+    /// The echo strength of `input`'s point `i` at `pos` (sensor frame), a
+    /// floor or ceiling seen directly (`space`) met at the incidence of its
+    /// level where the scan's neighbours span no surface.
+    fn strength(
+        &self,
+        input: &FrameInput<'_>,
+        i: usize,
+        pos: &Point3<f64>,
+        space: &SensorFrameSpace<'_>,
+    ) -> f64 {
+        let level = space.level_incidence_cos(pos);
+        let cos = self.split.incidence_cos(input.scan, input.frame, i, level);
         echo_strength(
             input.frame.points[i].intensity,
-            range,
+            pos.coords.norm(),
             self.range_exponent,
             cos,
         )
@@ -122,7 +133,7 @@ impl EchoCounting<'_> {
             h.range,
             decision.pane_edge_margin,
         );
-        let strength = self.strength(view.input, i, range);
+        let strength = self.strength(view.input, i, &pos, view.space);
         stats.all.add(strength);
         if !near_edge {
             stats.inside.add(strength);

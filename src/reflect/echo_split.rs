@@ -115,11 +115,20 @@ impl EchoSplitParams {
     /// The `cos` of [`echo_strength`] for `frame`'s point `point` under
     /// these settings: the cosine of the incidence at which its beam met
     /// its surface (from its neighbours in `scan`) when strengths are
-    /// corrected for it, else 1 (also where the neighbours span no
-    /// surface). The strengths a split is fitted to are computed with it,
-    /// as [`EchoSplit::incidence_cos`] computes the ones it decides.
-    pub fn incidence_cos(&self, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
-        incidence_cos(self.incidence_correction, scan, frame, point)
+    /// corrected for it, else 1. Where the neighbours span no surface (a
+    /// floor met at grazing incidence, whose next ring lies metres away)
+    /// it is `fallback` when the caller knows the surface (a floor or
+    /// ceiling seen directly), else 1. The strengths a split is fitted to
+    /// are computed with it, as [`EchoSplit::incidence_cos`] computes the
+    /// ones it decides.
+    pub fn incidence_cos(
+        &self,
+        scan: &OrganizedScan,
+        frame: &Frame,
+        point: usize,
+        fallback: Option<f64>,
+    ) -> f64 {
+        incidence_cos(self.incidence_correction, scan, frame, point, fallback)
     }
 }
 
@@ -177,12 +186,18 @@ impl Default for EchoHistogram {
 /// The `cos` of [`echo_strength`] for point `point` of `frame`: the cosine
 /// of the incidence at which its beam met its surface (from its neighbours
 /// in `scan`) when the strengths are corrected for it (`correct`), else 1;
-/// also 1 where the neighbours do not span a surface. One rule for every
-/// strength, so that the strengths a split is fitted to and the ones it
-/// decides are computed alike.
-fn incidence_cos(correct: bool, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
+/// where the neighbours do not span a surface, `fallback` when the caller
+/// knows it, else 1. One rule for every strength, so that the strengths a
+/// split is fitted to and the ones it decides are computed alike.
+fn incidence_cos(
+    correct: bool,
+    scan: &OrganizedScan,
+    frame: &Frame,
+    point: usize,
+    fallback: Option<f64>,
+) -> f64 {
     if correct {
-        scan.incidence_cos(frame, point).unwrap_or(1.0)
+        scan.incidence_cos(frame, point).or(fallback).unwrap_or(1.0)
     } else {
         1.0
     }
@@ -413,12 +428,18 @@ impl EchoSplit {
 
     /// The `cos` of [`reflected`](Self::reflected) for `frame`'s point
     /// `point`: the cosine of the incidence at which its beam met its
-    /// surface (from its neighbours in `scan`) when this split's strengths
-    /// are corrected for it, else 1 (also where the neighbours span no
-    /// surface), as [`EchoSplitParams::incidence_cos`] computed the
+    /// surface (from its neighbours in `scan`, else `fallback` when the
+    /// caller knows the surface) when this split's strengths are corrected
+    /// for it, else 1, as [`EchoSplitParams::incidence_cos`] computed the
     /// strengths it was fitted to.
-    pub fn incidence_cos(&self, scan: &OrganizedScan, frame: &Frame, point: usize) -> f64 {
-        incidence_cos(self.incidence_correction, scan, frame, point)
+    pub fn incidence_cos(
+        &self,
+        scan: &OrganizedScan,
+        frame: &Frame,
+        point: usize,
+        fallback: Option<f64>,
+    ) -> f64 {
+        incidence_cos(self.incidence_correction, scan, frame, point, fallback)
     }
 }
 
@@ -510,6 +531,71 @@ mod tests {
         // Anchors that exist must still agree.
         let weak_anchors = histogram(weak.iter().take(100).copied());
         assert_eq!(EchoSplit::fit(&two, &weak_anchors, &new, 2.0), None);
+    }
+
+    /// A floor far off is met at grazing incidence: its next ring lies
+    /// metres away, the scan's neighbours span no surface, and the cosine
+    /// the caller knows (the floor is horizontal) is used instead of 1;
+    /// without the incidence correction it is 1 whatever the caller knows.
+    #[test]
+    fn a_grazing_floor_takes_the_callers_incidence() {
+        use crate::cloud::Point;
+        use crate::sensor::SensorModel;
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        // The floor 1 m below the sensor, out to 20 m.
+        let mut points = Vec::new();
+        for ring in 0..sensor.rings() {
+            for col in 0..600 {
+                let d = sensor.beam_direction(ring, col);
+                if d.z > -0.02 {
+                    continue;
+                }
+                let p = d * (-1.0 / d.z);
+                if p.norm() > 20.0 {
+                    continue;
+                }
+                points.push(Point {
+                    xyz: [p.x as f32, p.y as f32, p.z as f32],
+                    intensity: 10.0,
+                    ring: ring as u16,
+                    ret: 1,
+                    label: 1,
+                    time: 0.0,
+                });
+            }
+        }
+        let frame = Frame {
+            name: "floor".into(),
+            points,
+            ..Frame::default()
+        };
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let corrected = EchoSplitParams::default();
+        let uncorrected = EchoSplitParams {
+            incidence_correction: false,
+            ..corrected
+        };
+        let mut grazing = 0;
+        for (i, pt) in frame.points.iter().enumerate() {
+            let p = pt.position();
+            let truth = 1.0 / p.coords.norm();
+            if scan.incidence_cos(&frame, i).is_some() {
+                // Where the neighbours tell, they decide.
+                let own = corrected.incidence_cos(&scan, &frame, i, None);
+                assert_eq!(corrected.incidence_cos(&scan, &frame, i, Some(0.5)), own);
+                continue;
+            }
+            grazing += 1;
+            assert_eq!(corrected.incidence_cos(&scan, &frame, i, None), 1.0);
+            let cos = corrected.incidence_cos(&scan, &frame, i, Some(truth));
+            assert!((cos - truth).abs() < 1e-12, "point {i}: {cos} vs {truth}");
+            assert_eq!(
+                uncorrected.incidence_cos(&scan, &frame, i, Some(truth)),
+                1.0
+            );
+        }
+        // The far floor is where the neighbours fail.
+        assert!(grazing > 100, "{grazing}");
     }
 
     /// `auto` follows the intensities' scale, a number forces the

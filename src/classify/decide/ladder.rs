@@ -212,8 +212,11 @@ impl<'a> Ladder<'a> {
     /// pane by pane, when configured.
     fn echo_strength(&self, pt: &Behind<'_>) -> Option<Decision> {
         let (frame, scan, i) = (self.frame, self.scan, pt.i);
+        // A floor or ceiling seen directly is met as a horizontal surface
+        // where the scan's neighbours span none, as the split's strengths.
+        let level = self.space.and_then(|s| s.level_incidence_cos(&pt.p));
         let strength = |split: &EchoSplit| {
-            let cos = split.incidence_cos(scan, frame, i);
+            let cos = split.incidence_cos(scan, frame, i, level);
             split.reflected(frame.points[i].intensity, pt.p.coords.norm(), cos)
         };
         let reflected = if pt.single_pane {
