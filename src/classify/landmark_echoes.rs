@@ -99,7 +99,7 @@ impl EchoCounting<'_> {
         pos: &Point3<f64>,
         space: &SensorFrameSpace<'_>,
     ) -> f64 {
-        let level = space.level_incidence_cos(pos);
+        let level = || space.level_incidence_cos(pos);
         let cos = self.split.incidence_cos(input.scan, input.frame, i, level);
         echo_strength(
             input.frame.points[i].intensity,

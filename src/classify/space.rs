@@ -495,8 +495,6 @@ mod tests {
         assert_eq!(again.bricks(), bricks);
     }
 
-    /// A grazing beam (85° incidence on the wall, passing 2 cm from it) does
-    /// not make the wall's neighbourhood free.
     /// A point at the height of the floor seen directly is met at the
     /// incidence of a horizontal surface whatever the sensor's attitude; a
     /// point at no level's height has none.
@@ -531,6 +529,8 @@ mod tests {
         );
     }
 
+    /// A grazing beam (85° incidence on the wall, passing 2 cm from it) does
+    /// not make the wall's neighbourhood free.
     #[test]
     fn a_grazing_beam_does_not_free_the_wall() {
         let mut map = room();

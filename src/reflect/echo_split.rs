@@ -117,16 +117,16 @@ impl EchoSplitParams {
     /// its surface (from its neighbours in `scan`) when strengths are
     /// corrected for it, else 1. Where the neighbours span no surface (a
     /// floor met at grazing incidence, whose next ring lies metres away)
-    /// it is `fallback` when the caller knows the surface (a floor or
-    /// ceiling seen directly), else 1. The strengths a split is fitted to
-    /// are computed with it, as [`EchoSplit::incidence_cos`] computes the
-    /// ones it decides.
+    /// it is what `fallback` says (a caller that knows the surface, a floor
+    /// or ceiling seen directly; asked only then), else 1. The strengths a
+    /// split is fitted to are computed with it, as
+    /// [`EchoSplit::incidence_cos`] computes the ones it decides.
     pub fn incidence_cos(
         &self,
         scan: &OrganizedScan,
         frame: &Frame,
         point: usize,
-        fallback: Option<f64>,
+        fallback: impl FnOnce() -> Option<f64>,
     ) -> f64 {
         incidence_cos(self.incidence_correction, scan, frame, point, fallback)
     }
@@ -186,18 +186,20 @@ impl Default for EchoHistogram {
 /// The `cos` of [`echo_strength`] for point `point` of `frame`: the cosine
 /// of the incidence at which its beam met its surface (from its neighbours
 /// in `scan`) when the strengths are corrected for it (`correct`), else 1;
-/// where the neighbours do not span a surface, `fallback` when the caller
-/// knows it, else 1. One rule for every strength, so that the strengths a
+/// where the neighbours do not span a surface, what `fallback` says (the
+/// caller's knowledge of the surface, asked only then), else 1. One rule for every strength, so that the strengths a
 /// split is fitted to and the ones it decides are computed alike.
 fn incidence_cos(
     correct: bool,
     scan: &OrganizedScan,
     frame: &Frame,
     point: usize,
-    fallback: Option<f64>,
+    fallback: impl FnOnce() -> Option<f64>,
 ) -> f64 {
     if correct {
-        scan.incidence_cos(frame, point).or(fallback).unwrap_or(1.0)
+        scan.incidence_cos(frame, point)
+            .or_else(fallback)
+            .unwrap_or(1.0)
     } else {
         1.0
     }
@@ -428,8 +430,8 @@ impl EchoSplit {
 
     /// The `cos` of [`reflected`](Self::reflected) for `frame`'s point
     /// `point`: the cosine of the incidence at which its beam met its
-    /// surface (from its neighbours in `scan`, else `fallback` when the
-    /// caller knows the surface) when this split's strengths are corrected
+    /// surface (from its neighbours in `scan`, else what `fallback`
+    /// says of the surface) when this split's strengths are corrected
     /// for it, else 1, as [`EchoSplitParams::incidence_cos`] computed the
     /// strengths it was fitted to.
     pub fn incidence_cos(
@@ -437,7 +439,7 @@ impl EchoSplit {
         scan: &OrganizedScan,
         frame: &Frame,
         point: usize,
-        fallback: Option<f64>,
+        fallback: impl FnOnce() -> Option<f64>,
     ) -> f64 {
         incidence_cos(self.incidence_correction, scan, frame, point, fallback)
     }
@@ -581,16 +583,16 @@ mod tests {
             let truth = 1.0 / p.coords.norm();
             if scan.incidence_cos(&frame, i).is_some() {
                 // Where the neighbours tell, they decide.
-                let own = corrected.incidence_cos(&scan, &frame, i, None);
-                assert_eq!(corrected.incidence_cos(&scan, &frame, i, Some(0.5)), own);
+                let own = corrected.incidence_cos(&scan, &frame, i, || None);
+                assert_eq!(corrected.incidence_cos(&scan, &frame, i, || Some(0.5)), own);
                 continue;
             }
             grazing += 1;
-            assert_eq!(corrected.incidence_cos(&scan, &frame, i, None), 1.0);
-            let cos = corrected.incidence_cos(&scan, &frame, i, Some(truth));
+            assert_eq!(corrected.incidence_cos(&scan, &frame, i, || None), 1.0);
+            let cos = corrected.incidence_cos(&scan, &frame, i, || Some(truth));
             assert!((cos - truth).abs() < 1e-12, "point {i}: {cos} vs {truth}");
             assert_eq!(
-                uncorrected.incidence_cos(&scan, &frame, i, Some(truth)),
+                uncorrected.incidence_cos(&scan, &frame, i, || Some(truth)),
                 1.0
             );
         }

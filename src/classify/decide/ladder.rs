@@ -214,7 +214,7 @@ impl<'a> Ladder<'a> {
         let (frame, scan, i) = (self.frame, self.scan, pt.i);
         // A floor or ceiling seen directly is met as a horizontal surface
         // where the scan's neighbours span none, as the split's strengths.
-        let level = self.space.and_then(|s| s.level_incidence_cos(&pt.p));
+        let level = || self.space.and_then(|s| s.level_incidence_cos(&pt.p));
         let strength = |split: &EchoSplit| {
             let cos = split.incidence_cos(scan, frame, i, level);
             split.reflected(frame.points[i].intensity, pt.p.coords.norm(), cos)

@@ -58,7 +58,7 @@ pub(super) fn past_seen_extent(
     // A reflection off glass is weak: a return as strong as the landmark's
     // transmitted echoes (a direct return is stronger still) is real.
     if let Some(split) = &bp.echo_split {
-        let level = space.and_then(|s| s.level_incidence_cos(&p));
+        let level = || space.and_then(|s| s.level_incidence_cos(&p));
         let cos = split.incidence_cos(scan, frame, i, level);
         if split.reflected(frame.points[i].intensity, p.coords.norm(), cos) == Some(false) {
             return Some((Class::Normal, Rule::EchoStrength));

@@ -62,9 +62,11 @@ impl EvidenceTest for EchoStrength {
 
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let split = point.landmark.echo_split.filter(|_| point.single_pane)?;
-        let level = point
-            .space
-            .and_then(|s| s.level_incidence_cos(&point.position));
+        let level = || {
+            point
+                .space
+                .and_then(|s| s.level_incidence_cos(&point.position))
+        };
         let cos = split.incidence_cos(point.scan, point.frame, point.index, level);
         let s = echo_strength(point.intensity(), point.range, split.range_exponent, cos);
         let weak = (split.weak_mean, split.weak_spread.max(MIN_SPREAD));
