@@ -541,36 +541,13 @@ mod tests {
     /// without the incidence correction it is 1 whatever the caller knows.
     #[test]
     fn a_grazing_floor_takes_the_callers_incidence() {
-        use crate::cloud::Point;
+        use crate::sensor::scan::surface_frame;
         use crate::sensor::SensorModel;
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         // The floor 1 m below the sensor, out to 20 m.
-        let mut points = Vec::new();
-        for ring in 0..sensor.rings() {
-            for col in 0..600 {
-                let d = sensor.beam_direction(ring, col);
-                if d.z > -0.02 {
-                    continue;
-                }
-                let p = d * (-1.0 / d.z);
-                if p.norm() > 20.0 {
-                    continue;
-                }
-                points.push(Point {
-                    xyz: [p.x as f32, p.y as f32, p.z as f32],
-                    intensity: 10.0,
-                    ring: ring as u16,
-                    ret: 1,
-                    label: 1,
-                    time: 0.0,
-                });
-            }
-        }
-        let frame = Frame {
-            name: "floor".into(),
-            points,
-            ..Frame::default()
-        };
+        let frame = surface_frame(&sensor, "floor", |d| {
+            (d.z <= -0.02).then(|| d * (-1.0 / d.z))
+        });
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         let corrected = EchoSplitParams::default();
         let uncorrected = EchoSplitParams {

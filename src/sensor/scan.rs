@@ -278,6 +278,42 @@ fn grid_cell(sensor: &SensorModel, q: &nalgebra::Point3<f64>) -> usize {
     ring * sensor.columns + sensor.column_of(q.x, q.y)
 }
 
+/// A frame of one first return per beam of `sensor` (600 columns) where
+/// `hit` puts the surface along the beam's unit direction (`None`: no
+/// return), out to 20 m: flat scenes for the tests of what the scan's
+/// neighbours tell.
+#[cfg(test)]
+pub(crate) fn surface_frame(
+    sensor: &SensorModel,
+    name: &str,
+    hit: impl Fn(Vector3<f64>) -> Option<Vector3<f64>>,
+) -> Frame {
+    let mut points = Vec::new();
+    for ring in 0..sensor.rings() {
+        for col in 0..600 {
+            let Some(p) = hit(sensor.beam_direction(ring, col)) else {
+                continue;
+            };
+            if p.norm() > 20.0 {
+                continue;
+            }
+            points.push(crate::cloud::Point {
+                xyz: [p.x as f32, p.y as f32, p.z as f32],
+                intensity: 10.0,
+                ring: ring as u16,
+                ret: 1,
+                label: 1,
+                time: 0.0,
+            });
+        }
+    }
+    Frame {
+        name: name.into(),
+        points,
+        ..Frame::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,35 +362,9 @@ mod tests {
     /// the angle between the beam and the wall's normal.
     #[test]
     fn incidence_on_a_flat_wall_matches_the_geometry() {
-        use crate::cloud::Point;
         let sensor = SensorModel::resolve("pandar_qt64").unwrap();
         // The wall y = 4 (normal along y), seen by every beam towards it.
-        let mut points = Vec::new();
-        for ring in 0..sensor.rings() {
-            for col in 0..600 {
-                let d = sensor.beam_direction(ring, col);
-                if d.y < 0.2 {
-                    continue;
-                }
-                let p = d * (4.0 / d.y);
-                if p.norm() > 20.0 {
-                    continue;
-                }
-                points.push(Point {
-                    xyz: [p.x as f32, p.y as f32, p.z as f32],
-                    intensity: 10.0,
-                    ring: ring as u16,
-                    ret: 1,
-                    label: 1,
-                    time: 0.0,
-                });
-            }
-        }
-        let frame = Frame {
-            name: "wall".into(),
-            points,
-            ..Frame::default()
-        };
+        let frame = surface_frame(&sensor, "wall", |d| (d.y >= 0.2).then(|| d * (4.0 / d.y)));
         let scan = OrganizedScan::build(&frame, &sensor).unwrap();
         let mut checked = 0;
         for (i, pt) in frame.points.iter().enumerate() {
