@@ -187,8 +187,9 @@ impl Default for EchoHistogram {
 /// of the incidence at which its beam met its surface (from its neighbours
 /// in `scan`) when the strengths are corrected for it (`correct`), else 1;
 /// where the neighbours do not span a surface, what `fallback` says (the
-/// caller's knowledge of the surface, asked only then), else 1. One rule for every strength, so that the strengths a
-/// split is fitted to and the ones it decides are computed alike.
+/// caller's knowledge of the surface, asked only then), else 1. One rule
+/// for every strength, so that the strengths a split is fitted to and the
+/// ones it decides are computed alike.
 fn incidence_cos(
     correct: bool,
     scan: &OrganizedScan,
