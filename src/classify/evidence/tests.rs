@@ -5,7 +5,7 @@ use nalgebra::{Isometry3, Point3};
 
 use super::*;
 use crate::classify::boundary::BeamPlanes;
-use crate::classify::decide::tests::{frame, pane, room_space};
+use crate::classify::decide::tests::{frame, pane, room_space, two_panes};
 use crate::classify::decide::{BeamHits, DecisionParams};
 use crate::classify::weighed::{decide_weighed, FrameContext};
 use crate::classify::{Class, Decisions};
@@ -96,6 +96,22 @@ fn an_untested_point_takes_the_decided_share() {
     planes[0].reflection_share = Some(0.8);
     let d = weighed(&point, &planes, &only(&[]));
     assert_eq!(d.classes, [Class::Reflection]);
+    assert!((d.confidence[0] - 0.8).abs() < 1e-6, "{:?}", d.confidence);
+}
+
+/// Behind a second pane, a point no test weighs takes the nearer pane's
+/// share: it is no likelier real than one behind that pane alone.
+#[test]
+fn a_point_behind_two_panes_takes_the_nearer_ones_prior() {
+    let point = [[6.5f32, 0.2, 0.3]];
+    let mut planes = two_panes();
+    planes[0].mirror_probability = Some(0.0);
+    planes[0].reflection_share = Some(0.8);
+    planes[1].mirror_probability = Some(0.0);
+    planes[1].reflection_share = Some(0.1);
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert_eq!(d.rules, [Rule::Prior]);
     assert!((d.confidence[0] - 0.8).abs() < 1e-6, "{:?}", d.confidence);
 }
 

@@ -97,14 +97,20 @@ impl Weighing {
 
     /// The probability that `point` is a reflection before any test: the
     /// share of reflections among its landmark's echoes where their
-    /// strengths tell it; else, for a point behind its own glass that no
+    /// strengths tell it; else, for a point behind its glass that no
     /// test weighed (`weighed` false), the share of reflections among the
     /// landmark's echoes that the seen space decided; else its landmark a
-    /// mirror (then it is one), or glass (then the prior).
+    /// mirror (then it is one), or glass (then the prior). A beam that met
+    /// a second pane behind the first (its landmark, the nearer) takes the
+    /// first's: it was reflected there as often as any beam through it,
+    /// and a reflection in the second is a Reflection too, so the first's
+    /// share is the lower bound (the configured prior instead left such
+    /// points an unclassified tie). Only beside the landmark's extent is it
+    /// the configured prior.
     fn prior(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
         let landmark = point.landmark;
         let beside = !landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
-        let own = !beside && point.single_pane;
+        let own = !beside;
         let p = match (own, landmark.reflection_share) {
             (true, Some(share)) => share,
             (true, None) => match landmark.decided_share.filter(|_| !weighed) {

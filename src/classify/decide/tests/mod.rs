@@ -19,7 +19,7 @@ pub(crate) fn pane() -> Vec<BoundedPlane> {
 }
 
 /// [`pane`] and a second pane like it 1 m behind (x = 6).
-fn two_panes() -> Vec<BoundedPlane> {
+pub(crate) fn two_panes() -> Vec<BoundedPlane> {
     let mut planes = pane();
     let second = Plane::new(Vector3::new(-1.0, 0.0, 0.0), 6.0).unwrap();
     let corners = [(-2.0, -1.0), (2.0, -1.0), (2.0, 2.0), (-2.0, 2.0)];
