@@ -26,6 +26,16 @@ fn unknown_keys_and_bad_values_are_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("detector.dual_gap must be positive"), "{e}");
+    let e = Config::from_toml(
+        "[detector]\nsurface_tolerance_deg = 90.0",
+        Path::new("c.toml"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("detector.surface_tolerance_deg must be in (0, 90)"),
+        "{e}"
+    );
 }
 
 /// Dotted paths of every value in a table.

@@ -77,6 +77,13 @@ impl Config {
         if self.extractor.min_points < 3 {
             return Err("extractor.min_points must be at least 3".into());
         }
+        if let Some(tolerance) = d.surface_tolerance_deg {
+            if !(tolerance > 0.0 && tolerance < 90.0) {
+                return Err(format!(
+                    "detector.surface_tolerance_deg must be in (0, 90) (leave it out to keep every plane), got {tolerance}"
+                ));
+            }
+        }
         if let Some(parallel) = self.slam.points.parallel_reflective_deg {
             if !(parallel > 0.0 && parallel < 90.0) {
                 return Err(format!(
