@@ -110,17 +110,16 @@ impl Weighing {
     fn prior(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
         let landmark = point.landmark;
         let beside = !landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
-        let own = !beside;
-        let p = match (own, landmark.reflection_share) {
-            (true, Some(share)) => share,
-            (true, None) => match landmark.decided_share.filter(|_| !weighed) {
+        let p = match landmark.reflection_share {
+            _ if beside => self.reflection_prior,
+            Some(share) => share,
+            None => match landmark.decided_share.filter(|_| !weighed) {
                 Some(decided) => decided,
                 None => {
                     let mirror = landmark.mirror_probability.unwrap_or(0.0);
                     mirror + (1.0 - mirror) * self.reflection_prior
                 }
             },
-            (false, _) => self.reflection_prior,
         };
         p.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
     }
