@@ -172,9 +172,9 @@ impl CandidateRansacDetector {
         let min_cos = tolerance.to_radians().cos();
         let (mut surfaces, mut aligned) = (0usize, 0usize);
         for &i in inliers {
-            if let Some(n) = scan.local_normal(frame, i as usize) {
+            if let Some(faces) = scan.faces(frame, i as usize, &plane.normal, min_cos) {
                 surfaces += 1;
-                aligned += usize::from(n.dot(&plane.normal).abs() >= min_cos);
+                aligned += usize::from(faces);
             }
         }
         surfaces == 0 || aligned as f64 > (1.0 - min_cos) * surfaces as f64

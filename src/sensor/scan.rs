@@ -66,6 +66,21 @@ impl OrganizedScan {
         (norm > 1e-12).then(|| n / norm)
     }
 
+    /// Whether the surface around `point` faces along `normal` (unit)
+    /// within `min_cos` (`|n · normal| >= min_cos`): it lies along a plane
+    /// of that normal rather than crossing it. `None` where the neighbours
+    /// span no surface ([`local_normal`](Self::local_normal)).
+    pub fn faces(
+        &self,
+        frame: &Frame,
+        point: usize,
+        normal: &Vector3<f64>,
+        min_cos: f64,
+    ) -> Option<bool> {
+        self.local_normal(frame, point)
+            .map(|n| n.dot(normal).abs() >= min_cos)
+    }
+
     /// The cross product of the neighbour differences across columns and
     /// rings around `point` (unnormalised).
     fn neighbour_cross(&self, frame: &Frame, point: usize) -> Option<Vector3<f64>> {
@@ -374,6 +389,26 @@ mod tests {
             let p = pt.position();
             let truth = p.y / p.coords.norm();
             assert!((cos - truth).abs() < 0.02, "point {i}: {cos} vs {truth}");
+            checked += 1;
+        }
+        assert!(checked > 1000, "{checked}");
+    }
+
+    /// Every point of a flat wall with a surface around it faces along the
+    /// wall's normal, and none along a normal crossing the wall.
+    #[test]
+    fn points_of_a_wall_face_along_its_normal() {
+        let sensor = SensorModel::resolve("pandar_qt64").unwrap();
+        let frame = surface_frame(&sensor, "wall", |d| (d.y >= 0.2).then(|| d * (4.0 / d.y)));
+        let scan = OrganizedScan::build(&frame, &sensor).unwrap();
+        let min_cos = 20f64.to_radians().cos();
+        let mut checked = 0;
+        for i in 0..frame.points.len() {
+            let Some(along) = scan.faces(&frame, i, &Vector3::y(), min_cos) else {
+                continue;
+            };
+            assert!(along, "point {i}");
+            assert_eq!(scan.faces(&frame, i, &Vector3::z(), min_cos), Some(false));
             checked += 1;
         }
         assert!(checked > 1000, "{checked}");

@@ -178,8 +178,8 @@ impl<'a> PlaneTests<'a> {
         self.echo_normal_cos.is_some_and(|cos| {
             self.f
                 .scan
-                .local_normal(self.f.frame, i)
-                .is_some_and(|n| n.dot(&self.plane.plane.normal).abs() < cos)
+                .faces(self.f.frame, i, &self.plane.plane.normal, cos)
+                == Some(false)
         })
     }
 
