@@ -18,20 +18,16 @@ fn round_trips_through_toml() {
 
 #[test]
 fn unknown_keys_and_bad_values_are_errors() {
-    let e = Config::from_toml("sensorr = 1", Path::new("c.toml"))
-        .unwrap_err()
-        .to_string();
+    let error = |toml: &str| {
+        Config::from_toml(toml, Path::new("c.toml"))
+            .unwrap_err()
+            .to_string()
+    };
+    let e = error("sensorr = 1");
     assert!(e.contains("c.toml") && e.contains("sensorr"), "{e}");
-    let e = Config::from_toml("[detector]\ndual_gap = -1.0", Path::new("c.toml"))
-        .unwrap_err()
-        .to_string();
+    let e = error("[detector]\ndual_gap = -1.0");
     assert!(e.contains("detector.dual_gap must be positive"), "{e}");
-    let e = Config::from_toml(
-        "[detector]\nsurface_tolerance_deg = 90.0",
-        Path::new("c.toml"),
-    )
-    .unwrap_err()
-    .to_string();
+    let e = error("[detector]\nsurface_tolerance_deg = 90.0");
     assert!(
         e.contains("detector.surface_tolerance_deg must be in (0, 90)"),
         "{e}"
