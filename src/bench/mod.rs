@@ -102,6 +102,10 @@ pub struct SeedResult {
     pub ate: Option<f64>,
     /// Points scored.
     pub points: u64,
+    /// True reflections among them: what the reflection removal is a
+    /// share of (a handful of points makes it a coin toss).
+    #[serde(default)]
+    pub reflections: u64,
     /// Wall time of the sequence (simulation, both pipelines), seconds.
     pub seconds: f64,
     /// The calibration counts of the plane-optimized pipeline's
@@ -172,6 +176,7 @@ pub fn run_seed(
         glass_iou: m.class(Class::Glass).iou,
         ate,
         points: m.points,
+        reflections: m.class(Class::Reflection).truth,
         seconds: started.elapsed().as_secs_f64(),
         reliability: out.run.reliability.unwrap_or_default(),
     })

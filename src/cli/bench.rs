@@ -124,9 +124,10 @@ fn families(args: FamiliesArgs) -> Result<()> {
         let r = bench::run_seed(&name, seed, spec.frames, spec.slam, &config)
             .with_context(|| format!("benchmark run {name}/{seed}"))?;
         eprintln!(
-            "{name}/{seed}: mIoU {:.2}, removal {:.2}, obstacle IoU {:.2}, normal recall {:.2}, glass IoU {:.2}{} ({:.0} s)",
+            "{name}/{seed}: mIoU {:.2}, removal {:.2} (of {} reflections), obstacle IoU {:.2}, normal recall {:.2}, glass IoU {:.2}{} ({:.0} s)",
             r.miou,
             r.reflection_removal,
+            r.reflections,
             r.obstacle_iou,
             r.normal_recall,
             r.glass_iou,

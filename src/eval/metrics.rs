@@ -179,10 +179,14 @@ impl Confusion {
             .collect();
         let total = self.total();
         let correct: u64 = (0..4).map(|k| c[k][k + 1]).sum();
+        // A class absent from the truth has no IoU to average: its false
+        // predictions already count against the IoU of the classes those
+        // points are (one Obstacle called Reflection in a scene without
+        // reflections would otherwise weigh a quarter of the mean).
         let ious: Vec<f64> = per_class
             .iter()
+            .filter(|s| s.truth > 0)
             .map(|s| s.iou)
-            .filter(|v| v.is_finite())
             .collect();
         let (n, g, r) = (0, 1, 2);
         let (pn, pg, pr, po) = (1, 2, 3, 4);
@@ -237,7 +241,7 @@ pub struct Metrics {
     pub classes: Vec<ClassScores>,
     /// Share of scored points predicted as their class.
     pub accuracy: f64,
-    /// Mean IoU over the four classes.
+    /// Mean IoU over the four classes, of those present in the truth.
     pub miou: f64,
     /// Of the points kept and not called reflection (N, G, O), the share that
     /// are not reflections.
@@ -344,5 +348,27 @@ mod tests {
         assert!((m.indoor_precision - 75.0).abs() < 1e-9);
         // Of the 3 true N/G points, all 3 predicted N or G.
         assert!((conf.indoor_recall() - 100.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_class_absent_from_the_truth_is_not_averaged() {
+        // Truth: three Normal, one Obstacle; one Normal called Reflection.
+        let mut conf = Confusion::default();
+        conf.add(
+            &[1u8, 1, 1, 6],
+            &[
+                Class::Normal,
+                Class::Normal,
+                Class::Reflection,
+                Class::Obstacle,
+            ],
+        );
+        let m = conf.metrics();
+        let n = m.class(Class::Normal).iou;
+        assert!((n - 200.0 / 3.0).abs() < 1e-9, "{n}");
+        // Reflection: no truth, one prediction (IoU 0); not in the mean,
+        // its miss already lowers the Normal IoU.
+        assert_eq!(m.class(Class::Reflection).iou, 0.0);
+        assert!((m.miou - (n + 100.0) / 2.0).abs() < 1e-9, "{}", m.miou);
     }
 }
