@@ -117,12 +117,12 @@ pub fn run(args: SlamArgs) -> Result<()> {
         .collect();
     io::write_planes(&out.join("planes.json"), &records)?;
     let mut csv = String::from(
-        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms,interval,gap,jump,turn_deg,implausible_motion,recovered_yaw_deg,loop_candidates,loop_with,loop_correction,loop_resolved\n",
+        "name,planes,frame_matches,frame_inliers,map_matches,inliers,degenerate,degenerate_directions,min_eigenvalue,fallback,fixed_by_points,landmarks,time_ms,interval,gap,jump,turn_deg,implausible_motion,recovered_yaw_deg,points_yaw_deg,loop_candidates,loop_with,loop_correction,loop_resolved\n",
     );
     for (r, t) in slam.reports.iter().zip(&slam.frame_times) {
         writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3},{},{},{:.4},{:.2},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{:.4},{},{},{},{:.3},{},{},{:.4},{:.2},{},{},{},{},{},{},{}",
             names[r.index],
             r.planes,
             r.frame_matches,
@@ -150,6 +150,9 @@ pub fn run(args: SlamArgs) -> Result<()> {
             r.motion.turn_deg,
             r.motion.implausible,
             r.recovered_yaw_deg
+                .map(|y| format!("{y:.1}"))
+                .unwrap_or_default(),
+            r.points_yaw_deg
                 .map(|y| format!("{y:.1}"))
                 .unwrap_or_default(),
             r.loop_candidates,

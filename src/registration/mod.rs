@@ -35,7 +35,7 @@ pub use degeneracy::Degeneracy;
 pub use gauss_newton::{refine, GaussNewtonParams, Refinement};
 pub use matching::{match_planes, MatchCriteria};
 pub use point_to_plane::{
-    refine_free_directions, PointRefineParams, PointRefinement, SurfaceSample,
+    point_residual, refine_free_directions, PointRefineParams, PointRefinement, SurfaceSample,
 };
 pub use rejector::{
     AcceptAll, Consensus, GroundTripleRansac, MismatchRejector, RejectorName, RejectorParams,

@@ -189,6 +189,10 @@ pub struct FrameReport {
     /// was found this many degrees away from it
     /// ([`RecoveryParams`]).
     pub recovered_yaw_deg: Option<f64>,
+    /// The planes left the heading free and the point search
+    /// ([`search_heading_by_points`](super::recovery::search_heading_by_points))
+    /// turned the pose by this many degrees before the point refinement.
+    pub points_yaw_deg: Option<f64>,
     /// Landmarks in the map after the update.
     pub landmarks: usize,
     /// Landmarks pruned in this step.
@@ -376,6 +380,7 @@ impl Tracker {
             fallback: false,
             fixed_by_points: 0,
             recovered_yaw_deg: None,
+            points_yaw_deg: None,
             landmarks: 0,
             pruned: 0,
             pose: self.origin,

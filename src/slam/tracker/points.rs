@@ -2,7 +2,7 @@
 //! directions the plane registration left free against its local point
 //! map.
 
-use nalgebra::{Isometry3, Matrix6, SymmetricEigen, Vector6};
+use nalgebra::{Isometry3, Matrix6, SymmetricEigen, Unit, UnitQuaternion, Vector3, Vector6};
 
 use super::Tracker;
 use crate::frontend::FramePlane;
@@ -11,11 +11,13 @@ use crate::reflect::BoundedPlane;
 use crate::registration::{refine_free_directions, PointRefineParams};
 use crate::slam::log::PointsAnchor;
 use crate::slam::point_map::ScanSamples;
+use crate::slam::recovery::{search_heading_by_points, up_axis};
 use crate::slam::tracker::FrameReport;
 
 impl Tracker {
     /// Refine the directions of `pose` that the planes left free (per
-    /// `report`'s degeneracy) against the local point map, then add the
+    /// `report`'s degeneracy) against the local point map (first searching
+    /// the heading when it is among them), then add the
     /// frame's samples to the map; samples behind a reflective plane of the
     /// frame or of the map are left out of both, unless every free
     /// direction lies in that plane (`parallel_reflective_deg`: there a
@@ -53,6 +55,22 @@ impl Tracker {
         let clean = samples.without_reflections(&reflective, pp.reflective_margin);
         let mut pose = pose;
         let mut anchor = None;
+        let up = up_axis(planes);
+        if heading_is_free(&free, &up) && !self.points.is_empty() {
+            let points = &self.points;
+            if let Some(yaw) = search_heading_by_points(
+                &clean,
+                |q, d| points.nearest(q, d),
+                &pose,
+                &up,
+                pp.max_correspondence,
+                pp.kernel_scale,
+                pp.min_information,
+            ) {
+                pose *= UnitQuaternion::from_axis_angle(&up, yaw.to_radians());
+                report.points_yaw_deg = Some(yaw);
+            }
+        }
         if !free.is_empty() {
             let params = PointRefineParams {
                 max_correspondence: pp.max_correspondence,
@@ -79,6 +97,14 @@ impl Tracker {
             .forget_beyond(&pose.translation.vector.into(), pp.map_radius);
         (pose, anchor)
     }
+}
+
+/// Whether the heading (a turn about `up`, sensor frame) lies mostly in
+/// the span of `free` (orthonormal tangent directions): the planes did not
+/// fix it.
+fn heading_is_free(free: &[Vector6<f64>], up: &Unit<Vector3<f64>>) -> bool {
+    let turn = Vector6::new(0.0, 0.0, 0.0, up.x, up.y, up.z);
+    free.iter().map(|d| d.dot(&turn).powi(2)).sum::<f64>() > 0.5
 }
 
 /// Whether every direction of `free` (tangent vectors `(ρ, φ)`, sensor
