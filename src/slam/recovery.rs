@@ -188,7 +188,9 @@ pub const POINT_SEARCH_SAMPLES: usize = 500;
 /// a Cauchy weight of the point-to-plane distance to the nearest map
 /// point within `max_distance`, `kernel_scale` m), searched at
 /// [`POINT_SEARCH_STEP_DEG`] out to [`POINT_SEARCH_MAX_YAW_DEG`] on both
-/// sides; `None` when no turn lays them better than the pose itself, or
+/// sides and placed between the steps by the parabola through the best
+/// and its neighbours; `None` when no turn lays them better than the pose
+/// itself, or
 /// when the best lays fewer than `min_support` samples (weighted) on the
 /// map: a frame that sees almost no surface (a turn towards an open
 /// street) keeps the motion model's heading rather than the best fit of a
@@ -236,7 +238,20 @@ pub fn search_heading_by_points(
             best = (yaw, s);
         }
     }
-    (best.0 != 0.0 && best.1 >= min_support).then_some(best.0)
+    if best.0 == 0.0 || best.1 < min_support {
+        return None;
+    }
+    // Between the steps: the vertex of the parabola through the best and
+    // its two neighbours (the score is smooth at the scale of a step).
+    let step = POINT_SEARCH_STEP_DEG;
+    let (below, above) = (score(best.0 - step), score(best.0 + step));
+    let curvature = below - 2.0 * best.1 + above;
+    let offset = if curvature < 0.0 {
+        (0.5 * (below - above) / curvature * step).clamp(-0.5 * step, 0.5 * step)
+    } else {
+        0.0
+    };
+    Some(best.0 + offset)
 }
 
 #[cfg(test)]
@@ -274,9 +289,9 @@ mod tests {
         let mut map = LocalPointMap::new(0.5, 20);
         map.insert(&world, &Isometry3::identity(), 0);
         let nearest = |p: &Point3<f64>, d: f64| map.nearest(p, d);
-        // The sensor turned 12 deg to the left; the prediction says it did
-        // not turn.
-        let truth = Isometry3::rotation(Vector3::z() * 12f64.to_radians());
+        // The sensor turned 12.4 deg to the left; the prediction says it
+        // did not turn.
+        let truth = Isometry3::rotation(Vector3::z() * 12.4f64.to_radians());
         let seen: Vec<SurfaceSample> = world
             .iter()
             .map(|s| SurfaceSample {
@@ -287,7 +302,9 @@ mod tests {
         let up = Vector3::z_axis();
         let found =
             search_heading_by_points(&seen, nearest, &Isometry3::identity(), &up, 0.5, 0.05, 20.0);
-        assert_eq!(found, Some(12.0));
+        // Found between the steps.
+        let found = found.expect("a turn");
+        assert!((found - 12.4).abs() < 0.2, "{found}");
         // Where the prediction is right, it stays.
         assert_eq!(
             search_heading_by_points(&seen, nearest, &truth, &up, 0.5, 0.05, 20.0),
