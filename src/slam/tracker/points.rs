@@ -146,6 +146,27 @@ mod tests {
     use super::*;
     use crate::geometry::Plane;
 
+    /// The heading is free when the free directions turn about up more
+    /// than they do anything else (together, if need be); a free
+    /// translation or a turn about another axis leaves it fixed.
+    #[test]
+    fn the_heading_is_free_only_where_a_free_direction_turns_about_up() {
+        let up = Vector3::z_axis();
+        let yaw = Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+        let roll = Vector6::new(0.0, 0.0, 0.0, 1.0, 0.0, 0.0);
+        let along = Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        assert!(heading_is_free(&[yaw], &up));
+        assert!(heading_is_free(&[along, yaw], &up));
+        assert!(!heading_is_free(&[], &up));
+        assert!(!heading_is_free(&[along, roll], &up));
+        // The turn shared by two orthonormal directions, each mostly
+        // something else or mostly the turn.
+        let a = Vector6::new(0.8, 0.0, 0.0, 0.0, 0.0, 0.6);
+        let b = Vector6::new(-0.6, 0.0, 0.0, 0.0, 0.0, 0.8);
+        assert!(heading_is_free(&[a, b], &up));
+        assert!(!heading_is_free(&[a], &up));
+    }
+
     /// Of the span of x and y, fixing x leaves y; fixing nothing leaves
     /// both.
     #[test]
