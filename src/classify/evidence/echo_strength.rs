@@ -11,6 +11,12 @@ use crate::reflect::echo_split::echo_strength;
 /// ([`EchoSplit`](crate::reflect::EchoSplit)), a point's strength is weighed
 /// as a Gaussian in each group (log-strength, decades, with the group's own
 /// mean and spread): groups that overlap weigh little.
+///
+/// Behind a second pane as well: a reflection in the landmark (the nearer
+/// pane) keeps its `R²` wherever it appears, and a second clear pane takes
+/// a transmitted echo down by its own `T²` only, under 0.15 decades, far
+/// less than the groups lie apart. (The "second pane" is often no pane: a
+/// facade seen through the window that its near returns made a plane.)
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EchoStrength {
@@ -61,7 +67,7 @@ impl EvidenceTest for EchoStrength {
     }
 
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
-        let split = point.landmark.echo_split.filter(|_| point.single_pane)?;
+        let split = point.landmark.echo_split?;
         let level = || {
             point
                 .space

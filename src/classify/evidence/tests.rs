@@ -5,7 +5,7 @@ use nalgebra::{Isometry3, Point3};
 
 use super::*;
 use crate::classify::boundary::BeamPlanes;
-use crate::classify::decide::tests::{frame, pane, room_space, two_panes};
+use crate::classify::decide::tests::{frame, pane, room_space, split, two_panes};
 use crate::classify::decide::{BeamHits, DecisionParams};
 use crate::classify::weighed::{decide_weighed, FrameContext};
 use crate::classify::{Class, Decisions};
@@ -15,8 +15,18 @@ use crate::sensor::{OrganizedScan, SensorModel};
 /// The weighed decisions for `points` behind `planes`, with the room in
 /// front of the pane seen directly.
 fn weighed(points: &[[f32; 3]], planes: &[BoundedPlane], weighing: &Weighing) -> Decisions {
+    weighed_at(points, 10.0, planes, weighing)
+}
+
+/// [`weighed`] for points of echo intensity `intensity`.
+fn weighed_at(
+    points: &[[f32; 3]],
+    intensity: f32,
+    planes: &[BoundedPlane],
+    weighing: &Weighing,
+) -> Decisions {
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
-    let f = frame(points, 10.0);
+    let f = frame(points, intensity);
     let scan = OrganizedScan::build(&f, &sensor).unwrap();
     let params = DecisionParams::default();
     let beams = BeamPlanes::hulls(planes, 0.0);
@@ -113,6 +123,26 @@ fn a_point_behind_two_panes_takes_the_nearer_ones_prior() {
     assert_eq!(d.classes, [Class::Reflection]);
     assert_eq!(d.rules, [Rule::Prior]);
     assert!((d.confidence[0] - 0.8).abs() < 1e-6, "{:?}", d.confidence);
+}
+
+/// Behind a second pane the echo strength still weighs, by the nearer
+/// pane's groups: a reflection in it keeps its weak echo wherever it
+/// appears (the "second pane" may be a facade seen through the first).
+#[test]
+fn behind_two_panes_the_echo_strength_weighs_by_the_nearer_pane() {
+    let point = [[8.0f32, 0.2, 0.3]];
+    let mut planes = two_panes();
+    planes[0].echo_split = Some(split());
+    let strength = only(&["echo-strength"]);
+    let weak = weighed_at(&point, 1.0, &planes, &strength);
+    assert_eq!(weak.classes, [Class::Reflection]);
+    assert_eq!(weak.rules, [Rule::EchoStrength]);
+    let strong = weighed_at(&point, 100.0, &planes, &strength);
+    assert_eq!(strong.classes, [Class::Obstacle]);
+    // Without the nearer pane's groups nothing weighs: an even tie.
+    planes[0].echo_split = None;
+    let none = weighed_at(&point, 1.0, &planes, &strength);
+    assert_eq!(none.classes, [Class::Unclassified]);
 }
 
 /// The point's mirror image lands in the room, seen free: the seen-space

@@ -373,7 +373,7 @@ fn beams_through_a_second_pane_skip_the_one_pane_tests() {
 
 /// A split for the synthetic panes: at 8 m `log10(I r²)` is 1.8 for
 /// I = 1 and 3.8 for I = 100.
-fn split() -> crate::reflect::EchoSplit {
+pub(crate) fn split() -> crate::reflect::EchoSplit {
     crate::reflect::EchoSplit {
         threshold: 2.8,
         band: 0.1,
