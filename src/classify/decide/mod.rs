@@ -188,7 +188,10 @@ pub struct DecisionParams {
     /// pane behind it: a reflection off the first pane is weak whatever
     /// lies beyond, and a transmitted echo stays strong through uncoated
     /// glass (glass doors and partitions seen through one another), while
-    /// the geometric tests say nothing past a second pane.
+    /// the geometric tests say nothing past a second pane. Read by the
+    /// ladder, which goes pane by pane (`past_pane.rs`); the weighed
+    /// model's echo-strength test always weighs such beams, by the nearer
+    /// pane's groups alone.
     pub echo_strength_past_second_pane: bool,
     /// A reflective landmark may continue as glass up to this far above
     /// its seen extent (up its plane), where its evidence calls the plane
