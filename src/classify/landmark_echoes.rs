@@ -15,6 +15,7 @@ use super::plane_map::{PlaneMapClassifier, PlaneMapParams};
 use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
 use super::FrameInput;
+use crate::map::glass_or_mirror::IMAGE_NULL_SHIFTS;
 use crate::map::BehindEchoes;
 use crate::reflect::echo_split::echo_strength;
 use crate::reflect::{BoundedPlane, EchoHistogram, EchoSplitParams};
@@ -165,6 +166,26 @@ impl EchoCounting<'_> {
         let refuted = |end: &Point3<f64>| {
             seen_space.refuted(view.space, view.seen, &plane.normal, &x, end, range)
         };
+        // An image on a surface seen directly, where the point was measured
+        // none was, not at a floor's or ceiling's height (a vertical pane
+        // mirrors the floor behind it onto the floor in front, real or not).
+        let seen_empty_at_pos = view.seen.is_some_and(|s| !s.near(&pos, SUPPORT_RADIUS));
+        let on_seen_surface = |image: &Point3<f64>| {
+            seen_empty_at_pos
+                && view.space.level_of(image, tolerance).is_none()
+                && view.seen.is_some_and(|s| s.near(image, SUPPORT_RADIUS))
+        };
+        // Every echo's image moved off the mirror position: how often such
+        // images land on a seen surface by chance (counted over all the
+        // echoes inside, the rate the real echoes' images were measured to
+        // land at on the development split).
+        let towards_sensor = plane.normal * plane.d.signum();
+        for shift in IMAGE_NULL_SHIFTS {
+            let moved = mirrored + towards_sensor * shift;
+            if on_seen_surface(&moved) && !refuted(&moved) {
+                stats.imaged_by_chance += 1;
+            }
+        }
         if refuted(&mirrored) {
             // Real where measured: its mirror image refuted by the seen
             // space, its measured position not.
@@ -176,15 +197,8 @@ impl EchoCounting<'_> {
             }
             return;
         }
-        // A reflection: its mirror image lies on a surface seen directly,
-        // where it was measured none was. Not at a floor or ceiling: a
-        // vertical pane mirrors the floor behind it onto the floor in front,
-        // real or not.
-        let imaged = view.space.level_of(&mirrored, tolerance).is_none()
-            && view.seen.is_some_and(|s| {
-                s.near(&mirrored, SUPPORT_RADIUS) && !s.near(&pos, SUPPORT_RADIUS)
-            });
-        if imaged {
+        // A reflection: its mirror image lies on a surface seen directly.
+        if on_seen_surface(&mirrored) {
             stats.imaged += 1;
         }
     }

@@ -70,6 +70,12 @@ pub struct BehindEchoes {
     /// How many of `inside` have a mirror image on a surface seen directly
     /// and none where they were measured (confirmed reflections).
     pub imaged: u64,
+    /// How many images of `inside`'s echoes, moved off the mirror position
+    /// along the plane's normal ([`IMAGE_NULL_SHIFTS`]), land the same way,
+    /// summed over the shifts: the chance landings that `imaged` also
+    /// holds (a real echo's image lands on a seen surface as often moved
+    /// or not; a reflection's, moved off the surface it came from, rarely).
+    pub imaged_by_chance: u64,
     /// Of the confirmed transmissions, how many ended at each level (floor
     /// or ceiling) seen directly, by the level's index.
     pub transmitted_at_level: Vec<u64>,
@@ -83,6 +89,7 @@ impl BehindEchoes {
         self.inside.merge(&other.inside);
         self.transmitted.merge(&other.transmitted);
         self.imaged += other.imaged;
+        self.imaged_by_chance += other.imaged_by_chance;
         for (k, &n) in other.transmitted_at_level.iter().enumerate() {
             *self.at_level(k) += n;
         }
@@ -219,11 +226,26 @@ fn physical_split(
 /// space decides: confirmed reflections against confirmed transmissions
 /// (each beam's image or position seen or not is taken as independent of
 /// what it is), with one of each assumed before; `None` with fewer than
-/// [`MIN_DECIDED`] decided.
+/// [`MIN_DECIDED`] decided. The confirmed reflections are the images on a
+/// seen surface beyond those that land there by chance: as many as land
+/// there when moved off the mirror position ([`IMAGE_NULL_SHIFTS`]). In a
+/// furnished hall behind a clear pane, a real echo's image lands on a
+/// surface a quarter of the time, and those landings outnumbered the
+/// pane's few reflections ten to one.
 pub fn decided_share(behind: &BehindEchoes) -> Option<f64> {
-    let (r, t) = (behind.imaged as f64, behind.transmitted.total() as f64);
+    let chance = behind.imaged_by_chance as f64 / IMAGE_NULL_SHIFTS.len() as f64;
+    let r = (behind.imaged as f64 - chance).max(0.0);
+    let t = behind.transmitted.total() as f64;
     (r + t >= MIN_DECIDED as f64).then(|| (r + 1.0) / (r + t + 2.0))
 }
+
+/// How far the images of the chance-landing count
+/// ([`BehindEchoes::imaged_by_chance`]) are moved along the landmark's
+/// normal, m, away from the pane and towards it: farther than a seen
+/// surface's support radius (0.32 m) and the pose and plane errors, so a
+/// reflection's image leaves the surface it came from, and less than a
+/// room, so a real echo's image samples the same room.
+pub const IMAGE_NULL_SHIFTS: [f64; 2] = [1.0, -1.0];
 
 /// Decided echoes needed for [`decided_share`].
 pub const MIN_DECIDED: u64 = 100;
@@ -381,6 +403,33 @@ mod tests {
         let mostly_reflected = share(300, 100).expect("400 decided");
         assert!(mostly_reflected > 0.7, "{mostly_reflected}");
         assert_eq!(share(10, 40), None);
+    }
+
+    /// Images that land on a seen surface only as often as images moved
+    /// off the mirror position are chance landings, not reflections: behind
+    /// a clear pane in a furnished hall they would otherwise outnumber its
+    /// few reflections.
+    #[test]
+    fn chance_landings_are_no_confirmed_reflections() {
+        let direct = histogram((0..2000).map(|i| 3.0 + 0.0004 * i as f64));
+        let (split, p) = (EchoSplitParams::default(), MirrorParams::default());
+        let share = |imaged: u64, by_chance_per_shift: u64, transmitted: usize| {
+            let behind = BehindEchoes {
+                transmitted: transmissions(transmitted),
+                imaged,
+                imaged_by_chance: by_chance_per_shift * IMAGE_NULL_SHIFTS.len() as u64,
+                ..BehindEchoes::default()
+            };
+            glass_or_mirror(&behind, &direct, &split, &p, 2.0).decided_share
+        };
+        // 500 images on surfaces, 450 of them as often moved: 50 reflections.
+        let clear = share(500, 450, 400).expect("450 decided");
+        assert!((clear - 51.0 / 452.0).abs() < 1e-12, "{clear}");
+        assert!(share(500, 0, 400).unwrap() > 0.5);
+        // More chance landings than images: no reflection confirmed, and
+        // too few decided without them.
+        assert!((share(300, 400, 400).unwrap() - 1.0 / 402.0).abs() < 1e-12);
+        assert_eq!(share(300, 300, 60), None);
     }
 
     /// `n` confirmed transmissions, all of one strength.

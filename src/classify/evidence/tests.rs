@@ -84,8 +84,9 @@ fn the_landmark_prior_decides_without_evidence() {
 
 /// Behind glass, a point that no test weighs takes the share of
 /// reflections the seen space decided among its landmark's echoes as its
-/// prior; a point a test weighs keeps the landmark's prior, and a share of
-/// the echoes' strengths takes precedence.
+/// prior (mixed with the landmark's mirror probability); a point a test
+/// weighs keeps the landmark's prior, and a share of the echoes' strengths
+/// takes precedence.
 #[test]
 fn an_untested_point_takes_the_decided_share() {
     let point = [[5.5f32, 0.2, 0.3]];
@@ -102,6 +103,13 @@ fn an_untested_point_takes_the_decided_share() {
         weighed(&point, &planes, &nudged).classes,
         [Class::Reflection]
     );
+    // The decided share is that of the landmark as glass: behind a likely
+    // mirror an untested point is a reflection, at the mirror's odds.
+    planes[0].mirror_probability = Some(0.9);
+    let d = weighed(&point, &planes, &only(&[]));
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert!((d.confidence[0] - 0.91).abs() < 1e-6, "{:?}", d.confidence);
+    planes[0].mirror_probability = Some(0.0);
     // The strengths' share, where it exists, is the prior of every point.
     planes[0].reflection_share = Some(0.8);
     let d = weighed(&point, &planes, &only(&[]));

@@ -97,10 +97,10 @@ impl Weighing {
 
     /// The probability that `point` is a reflection before any test: the
     /// share of reflections among its landmark's echoes where their
-    /// strengths tell it; else, for a point behind its glass that no
-    /// test weighed (`weighed` false), the share of reflections among the
-    /// landmark's echoes that the seen space decided; else its landmark a
-    /// mirror (then it is one), or glass (then the prior). A beam that met
+    /// strengths tell it; else its landmark a mirror (then it is one), or
+    /// glass, whose share is, for a point that no test weighed (`weighed`
+    /// false), that of the reflections among the landmark's echoes that
+    /// the seen space decided, else the configured prior. A beam that met
     /// a second pane behind the first (its landmark, the nearer) takes the
     /// first's: it was reflected there as often as any beam through it,
     /// and a reflection in the second is a Reflection too, so the first's
@@ -110,15 +110,13 @@ impl Weighing {
     fn prior(&self, point: &BehindPoint<'_>, weighed: bool) -> f64 {
         let landmark = point.landmark;
         let beside = !landmark.bounds(&point.crossing_point(), -EDGE_MARGIN);
+        let mirror = landmark.mirror_probability.unwrap_or(0.0);
         let p = match landmark.reflection_share {
             _ if beside => self.reflection_prior,
             Some(share) => share,
             None => match landmark.decided_share.filter(|_| !weighed) {
-                Some(decided) => decided,
-                None => {
-                    let mirror = landmark.mirror_probability.unwrap_or(0.0);
-                    mirror + (1.0 - mirror) * self.reflection_prior
-                }
+                Some(decided) => mirror + (1.0 - mirror) * decided,
+                None => mirror + (1.0 - mirror) * self.reflection_prior,
             },
         };
         p.clamp(PRIOR_FLOOR, 1.0 - PRIOR_FLOOR)
