@@ -156,9 +156,26 @@ impl EchoCounting<'_> {
         if anchor {
             stats.anchors.add(strength);
         }
-        if near_edge {
-            return;
+        if !near_edge {
+            self.count_seen(view, h, &pos, &mirrored, strength, stats);
         }
+    }
+
+    /// Count an echo behind landmark `h.plane`, well inside its extent, as
+    /// the seen space decides it: a confirmed transmission, an image on a
+    /// seen surface (a confirmed reflection), and how many of its images
+    /// moved off the mirror position land on one by chance.
+    fn count_seen(
+        &self,
+        view: &FrameView<'_>,
+        h: BeamHit,
+        pos: &Point3<f64>,
+        mirrored: &Point3<f64>,
+        strength: f64,
+        stats: &mut BehindEchoes,
+    ) {
+        let pos = *pos;
+        let range = pos.coords.norm();
         let seen_space = &self.params.weighing.seen_space;
         let plane = &view.planes[h.plane].plane;
         let tolerance = self.params.weighing.level_surface.tolerance;
@@ -186,7 +203,7 @@ impl EchoCounting<'_> {
                 stats.imaged_by_chance += 1;
             }
         }
-        if refuted(&mirrored) {
+        if refuted(mirrored) {
             // Real where measured: its mirror image refuted by the seen
             // space, its measured position not.
             if !refuted(&pos) {
@@ -198,7 +215,7 @@ impl EchoCounting<'_> {
             return;
         }
         // A reflection: its mirror image lies on a surface seen directly.
-        if on_seen_surface(&mirrored) {
+        if on_seen_surface(mirrored) {
             stats.imaged += 1;
         }
     }
