@@ -8,6 +8,8 @@
 
 use nalgebra::Point3;
 
+use crate::geometry::Plane;
+
 use super::boundary::BeamPlanes;
 use super::decide::{near_pane_edge, BeamHit, BeamHits, SurfaceSupport};
 use super::evidence::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
@@ -193,12 +195,11 @@ impl EchoCounting<'_> {
                 && view.seen.is_some_and(|s| s.near(image, SUPPORT_RADIUS))
         };
         // Every echo's image moved off the mirror position: how often such
-        // images land on a seen surface by chance (counted over all the
-        // echoes inside, the rate the real echoes' images were measured to
-        // land at on the development split).
-        let towards_sensor = plane.normal * plane.d.signum();
+        // images land on a seen surface by chance. Counted over every echo
+        // inside, whatever the seen space makes of its own image, as the
+        // rates were measured (docs/decision.md, "Chance landings").
         for shift in IMAGE_NULL_SHIFTS {
-            let moved = mirrored + towards_sensor * shift;
+            let moved = moved_off(plane, mirrored, shift);
             if on_seen_surface(&moved) && !refuted(&moved) {
                 stats.imaged_by_chance += 1;
             }
@@ -217,6 +218,52 @@ impl EchoCounting<'_> {
         // A reflection: its mirror image lies on a surface seen directly.
         if on_seen_surface(mirrored) {
             stats.imaged += 1;
+        }
+    }
+}
+
+/// The mirror image `image` (sensor frame) moved `shift` metres along
+/// `plane`'s normal, away from the pane into the sensor's side where
+/// `shift` is positive, towards the pane (and past it) where negative.
+fn moved_off(plane: &Plane, image: &Point3<f64>, shift: f64) -> Point3<f64> {
+    let towards_sensor = if plane.d < 0.0 { -1.0 } else { 1.0 };
+    image + plane.normal * (towards_sensor * shift)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A point behind the pane mirrored and moved by `shift` lies on the
+        /// sensor's side `shift` farther from the pane (nearer where
+        /// negative), and moved back by `-shift` it is the image again.
+        #[test]
+        fn a_moved_image_moves_along_the_normal_from_the_pane(
+            n in prop::array::uniform3(-1.0f64..1.0),
+            d in 0.5f64..10.0,
+            flip in any::<bool>(),
+            depth in 0.1f64..8.0,
+            along in prop::array::uniform3(-5.0f64..5.0),
+            shift in -3.0f64..3.0,
+        ) {
+            let normal = Vector3::from(n);
+            prop_assume!(normal.norm() > 0.1);
+            let normal = normal.normalize();
+            let sign = if flip { -1.0 } else { 1.0 };
+            let plane = Plane { normal: normal * sign, d: d * sign };
+            // The pane's foot nearest the sensor, a point on it, one behind.
+            let foot = Point3::from(-normal * d);
+            let on = foot + (Vector3::from(along) - normal * normal.dot(&Vector3::from(along)));
+            let behind = on - normal * depth;
+            prop_assert!(plane.signed_distance(&behind) * plane.d < 0.0);
+            let image = plane.mirror(&behind);
+            let moved = moved_off(&plane, &image, shift);
+            let from_pane = |p: &Point3<f64>| plane.signed_distance(p) * plane.d.signum();
+            prop_assert!((from_pane(&moved) - (depth + shift)).abs() < 1e-9);
+            prop_assert!((moved_off(&plane, &moved, -shift) - image).norm() < 1e-9);
         }
     }
 }
