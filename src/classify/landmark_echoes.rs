@@ -159,7 +159,7 @@ impl EchoCounting<'_> {
             stats.anchors.add(strength);
         }
         if !near_edge {
-            self.count_seen(view, h, &pos, &mirrored, strength, stats);
+            self.count_seen(view, h, pos, &mirrored, strength, stats);
         }
     }
 
@@ -171,12 +171,11 @@ impl EchoCounting<'_> {
         &self,
         view: &FrameView<'_>,
         h: BeamHit,
-        pos: &Point3<f64>,
+        pos: Point3<f64>,
         mirrored: &Point3<f64>,
         strength: f64,
         stats: &mut BehindEchoes,
     ) {
-        let pos = *pos;
         let range = pos.coords.norm();
         let seen_space = &self.params.weighing.seen_space;
         let plane = &view.planes[h.plane].plane;
@@ -226,8 +225,7 @@ impl EchoCounting<'_> {
 /// `plane`'s normal, away from the pane into the sensor's side where
 /// `shift` is positive, towards the pane (and past it) where negative.
 fn moved_off(plane: &Plane, image: &Point3<f64>, shift: f64) -> Point3<f64> {
-    let towards_sensor = if plane.d < 0.0 { -1.0 } else { 1.0 };
-    image + plane.normal * (towards_sensor * shift)
+    image + plane.facing(&Point3::origin()).normal * shift
 }
 
 #[cfg(test)]
@@ -261,7 +259,7 @@ mod tests {
             prop_assert!(plane.signed_distance(&behind) * plane.d < 0.0);
             let image = plane.mirror(&behind);
             let moved = moved_off(&plane, &image, shift);
-            let from_pane = |p: &Point3<f64>| plane.signed_distance(p) * plane.d.signum();
+            let from_pane = |p: &Point3<f64>| plane.facing(&Point3::origin()).signed_distance(p);
             prop_assert!((from_pane(&moved) - (depth + shift)).abs() < 1e-9);
             prop_assert!((moved_off(&plane, &moved, -shift) - image).norm() < 1e-9);
         }
