@@ -8,11 +8,10 @@
 
 use nalgebra::Point3;
 
-use crate::geometry::Plane;
-
 use super::boundary::BeamPlanes;
 use super::decide::{near_pane_edge, BeamHit, BeamHits, SurfaceSupport};
-use super::evidence::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
+use super::evidence::seen_space::CLEARANCE_RATIO;
+use super::evidence::{moved_off, ImageLanding};
 use super::plane_map::{PlaneMapClassifier, PlaneMapParams};
 use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
@@ -176,92 +175,39 @@ impl EchoCounting<'_> {
         strength: f64,
         stats: &mut BehindEchoes,
     ) {
-        let range = pos.coords.norm();
-        let seen_space = &self.params.weighing.seen_space;
-        let plane = &view.planes[h.plane].plane;
-        let tolerance = self.params.weighing.level_surface.tolerance;
-        let x = Point3::from(pos.coords * (h.range / range));
-        let refuted = |end: &Point3<f64>| {
-            seen_space.refuted(view.space, view.seen, &plane.normal, &x, end, range)
-        };
-        // An image on a surface seen directly, where the point was measured
-        // none was, not at a floor's or ceiling's height (a vertical pane
-        // mirrors the floor behind it onto the floor in front, real or not).
-        let seen_empty_at_pos = view.seen.is_some_and(|s| !s.near(&pos, SUPPORT_RADIUS));
-        let on_seen_surface = |image: &Point3<f64>| {
-            seen_empty_at_pos
-                && view.space.level_of(image, tolerance).is_none()
-                && view.seen.is_some_and(|s| s.near(image, SUPPORT_RADIUS))
+        let landing = ImageLanding {
+            space: view.space,
+            seen: view.seen,
+            seen_space: &self.params.weighing.seen_space,
+            level_tolerance: self.params.weighing.level_surface.tolerance,
+            plane: &view.planes[h.plane].plane,
+            position: pos,
+            crossing: Point3::from(pos.coords * (h.range / pos.coords.norm())),
+            range: pos.coords.norm(),
         };
         // Every echo's image moved off the mirror position: how often such
         // images land on a seen surface by chance. Counted over every echo
         // inside, whatever the seen space makes of its own image, as the
         // rates were measured (docs/decision.md, "Chance landings").
         for shift in IMAGE_NULL_SHIFTS {
-            let moved = moved_off(plane, mirrored, shift);
-            if on_seen_surface(&moved) && !refuted(&moved) {
+            if landing.lands(&moved_off(landing.plane, mirrored, shift)) {
                 stats.imaged_by_chance += 1;
             }
         }
-        if refuted(mirrored) {
+        if landing.refuted(mirrored) {
             // Real where measured: its mirror image refuted by the seen
             // space, its measured position not.
-            if !refuted(&pos) {
+            if !landing.refuted(&pos) {
                 stats.transmitted.add(strength);
-                if let Some(k) = view.space.level_of(&pos, tolerance) {
+                if let Some(k) = view.space.level_of(&pos, landing.level_tolerance) {
                     *stats.at_level(k) += 1;
                 }
             }
             return;
         }
         // A reflection: its mirror image lies on a surface seen directly.
-        if on_seen_surface(mirrored) {
+        if landing.on_seen_surface(mirrored) {
             stats.imaged += 1;
-        }
-    }
-}
-
-/// The mirror image `image` (sensor frame) moved `shift` metres along
-/// `plane`'s normal, away from the pane into the sensor's side where
-/// `shift` is positive, towards the pane (and past it) where negative.
-fn moved_off(plane: &Plane, image: &Point3<f64>, shift: f64) -> Point3<f64> {
-    image + plane.facing(&Point3::origin()).normal * shift
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::Vector3;
-    use proptest::prelude::*;
-
-    proptest! {
-        /// A point behind the pane mirrored and moved by `shift` lies on the
-        /// sensor's side `shift` farther from the pane (nearer where
-        /// negative), and moved back by `-shift` it is the image again.
-        #[test]
-        fn a_moved_image_moves_along_the_normal_from_the_pane(
-            n in prop::array::uniform3(-1.0f64..1.0),
-            d in 0.5f64..10.0,
-            flip in any::<bool>(),
-            depth in 0.1f64..8.0,
-            along in prop::array::uniform3(-5.0f64..5.0),
-            shift in -3.0f64..3.0,
-        ) {
-            let normal = Vector3::from(n);
-            prop_assume!(normal.norm() > 0.1);
-            let normal = normal.normalize();
-            let sign = if flip { -1.0 } else { 1.0 };
-            let plane = Plane { normal: normal * sign, d: d * sign };
-            // The pane's foot nearest the sensor, a point on it, one behind.
-            let foot = Point3::from(-normal * d);
-            let on = foot + (Vector3::from(along) - normal * normal.dot(&Vector3::from(along)));
-            let behind = on - normal * depth;
-            prop_assert!(plane.signed_distance(&behind) * plane.d < 0.0);
-            let image = plane.mirror(&behind);
-            let moved = moved_off(&plane, &image, shift);
-            let from_pane = |p: &Point3<f64>| plane.facing(&Point3::origin()).signed_distance(p);
-            prop_assert!((from_pane(&moved) - (depth + shift)).abs() < 1e-9);
-            prop_assert!((moved_off(&plane, &moved, -shift) - image).norm() < 1e-9);
         }
     }
 }

@@ -1,30 +1,35 @@
-//! The mirror image lands on an observed surface.
+//! The mirror image lands on a surface seen directly, and only there.
 
+use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::{outcome_weight, BehindPoint, EvidenceTest};
-use crate::classify::decide::returns_along;
+use super::seen_space::SUPPORT_RADIUS;
+use super::{BehindPoint, EvidenceTest, SeenSpace};
+use crate::classify::decide::SurfaceSupport;
 use crate::classify::rule::Rule;
+use crate::classify::space::SensorFrameSpace;
+use crate::geometry::Plane;
+use crate::map::glass_or_mirror::IMAGE_NULL_SHIFTS;
 
-/// Mirrored through the landmark, a reflection lands on a real surface: a
-/// return of the frame at that range along the image's beam, or an observed
-/// surface within a radius.
+/// Mirrored through the landmark, a reflection lands on the surface it
+/// came from; a real point's image lands on one only by chance. A wall
+/// that runs along the normal holds the image of anything beside it, so
+/// only a landing that the image leaves when moved 1 m along the normal,
+/// either way ([`IMAGE_NULL_SHIFTS`]), counts: the landing is specific to
+/// the mirror position. Landing anywhere, the image of a real point did so
+/// on the development split as often as a reflection's did in symmetric
+/// rooms and corridors.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImageSupport {
-    /// Probability that the image of a real point lands on an observed
-    /// surface by chance (cluttered rooms, surfaces perpendicular to the
-    /// glass that are their own mirror image).
-    pub error: f64,
-    /// An observed surface within this radius of the image supports it, m.
-    /// An image this near the point itself is supported by the point's own
-    /// surface: no evidence.
-    pub radius: f64,
+    /// Probability that a reflection's mirror image lands specifically on a
+    /// surface seen directly (the others' images lie out of view, at a
+    /// floor's height, or on a wall along the normal).
+    pub reflection_rate: f64,
+    /// Probability that a real point's mirror image lands specifically on
+    /// a surface seen directly by chance.
+    pub chance_rate: f64,
 }
-
-/// A return within this range of the image along its beam supports it, m
-/// (range noise and the plane's error).
-const RANGE_TOLERANCE: f64 = 0.1;
 
 /// The values of `configs/default.toml`.
 impl Default for ImageSupport {
@@ -33,7 +38,29 @@ impl Default for ImageSupport {
     }
 }
 
-impl EvidenceTest for ImageSupport {
+impl ImageSupport {
+    /// The test with the settings it shares with the seen space (when a
+    /// path is refuted) and the level surfaces (a floor's or ceiling's
+    /// height, m), so that it decides landings as the landmark's
+    /// chance-landing count does.
+    pub fn test(self, seen_space: SeenSpace, level_tolerance: f64) -> ImageSupportTest {
+        ImageSupportTest {
+            params: self,
+            seen_space,
+            level_tolerance,
+        }
+    }
+}
+
+/// [`ImageSupport`] ready to weigh.
+#[derive(Debug, Clone, Copy)]
+pub struct ImageSupportTest {
+    params: ImageSupport,
+    seen_space: SeenSpace,
+    level_tolerance: f64,
+}
+
+impl EvidenceTest for ImageSupportTest {
     fn name(&self) -> &str {
         "image-support"
     }
@@ -43,17 +70,128 @@ impl EvidenceTest for ImageSupport {
     }
 
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
-        if (point.mirrored - point.position).norm() <= self.radius {
-            return None;
-        }
-        let image_range = point.mirrored.coords.norm();
-        let on_beam = returns_along(point.scan, point.sensor, point.frame, &point.mirrored, 1)
-            .is_some_and(|(closest, _)| (closest - image_range).abs() <= RANGE_TOLERANCE);
-        let nearby = || {
-            point
-                .support
-                .is_some_and(|s| s.near(&point.mirrored, self.radius))
+        let space = point
+            .space
+            .filter(|_| point.single_pane && !point.past_extent)?;
+        let landing = ImageLanding {
+            space,
+            seen: point.support,
+            seen_space: &self.seen_space,
+            level_tolerance: self.level_tolerance,
+            plane: &point.landmark.plane,
+            position: point.position,
+            crossing: point.crossing_point(),
+            range: point.range,
         };
-        (on_beam || nearby()).then(|| outcome_weight(self.error))
+        let specific = landing.lands(&point.mirrored)
+            && IMAGE_NULL_SHIFTS
+                .iter()
+                .all(|&s| !landing.lands(&moved_off(landing.plane, &point.mirrored, s)));
+        let rate = |r: f64| r.clamp(1e-6, 1.0);
+        specific.then(|| (rate(self.params.reflection_rate) / rate(self.params.chance_rate)).ln())
+    }
+}
+
+/// Where the images of one point behind a landmark land among what the
+/// sequence saw directly (sensor frame): the test above and the landmark's
+/// echo counts ([`count_seen`](crate::classify::landmark_echoes)) decide
+/// landings alike.
+pub(crate) struct ImageLanding<'a> {
+    /// The space seen directly, from the frame's pose.
+    pub space: &'a SensorFrameSpace<'a>,
+    /// The surfaces seen directly, when gathered.
+    pub seen: Option<&'a dyn SurfaceSupport>,
+    /// When a hypothesis's path is refuted.
+    pub seen_space: &'a SeenSpace,
+    /// Within this of a floor's or ceiling's height an image says nothing,
+    /// m: a vertical pane mirrors the floor behind it onto the floor in
+    /// front, real or not.
+    pub level_tolerance: f64,
+    /// The landmark (facing the sensor).
+    pub plane: &'a Plane,
+    /// Where the point was measured.
+    pub position: Point3<f64>,
+    /// Where its beam crossed the landmark.
+    pub crossing: Point3<f64>,
+    /// Its range, m.
+    pub range: f64,
+}
+
+impl ImageLanding<'_> {
+    /// Whether the seen space refutes "the echo came from `end`".
+    pub fn refuted(&self, end: &Point3<f64>) -> bool {
+        self.seen_space.refuted(
+            self.space,
+            self.seen,
+            &self.plane.normal,
+            &self.crossing,
+            end,
+            self.range,
+        )
+    }
+
+    /// Whether `image` lies on a surface seen directly where none was seen
+    /// at the measured position, not at a floor's or ceiling's height.
+    pub fn on_seen_surface(&self, image: &Point3<f64>) -> bool {
+        self.seen.is_some_and(|s| {
+            !s.near(&self.position, SUPPORT_RADIUS)
+                && self.space.level_of(image, self.level_tolerance).is_none()
+                && s.near(image, SUPPORT_RADIUS)
+        })
+    }
+
+    /// Whether `image` lands on a seen surface by a path the seen space
+    /// does not refute.
+    pub fn lands(&self, image: &Point3<f64>) -> bool {
+        self.on_seen_surface(image) && !self.refuted(image)
+    }
+}
+
+/// The mirror image `image` (sensor frame) moved `shift` metres along
+/// `plane`'s normal, away from the pane into the sensor's side where
+/// `shift` is positive, towards the pane (and past it) where negative.
+pub(crate) fn moved_off(plane: &Plane, image: &Point3<f64>, shift: f64) -> Point3<f64> {
+    image + facing_normal(plane) * shift
+}
+
+/// `plane`'s normal towards the sensor (the origin).
+fn facing_normal(plane: &Plane) -> Vector3<f64> {
+    plane.facing(&Point3::origin()).normal
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// A point behind the pane mirrored and moved by `shift` lies on the
+        /// sensor's side `shift` farther from the pane (nearer where
+        /// negative), and moved back by `-shift` it is the image again.
+        #[test]
+        fn a_moved_image_moves_along_the_normal_from_the_pane(
+            n in prop::array::uniform3(-1.0f64..1.0),
+            d in 0.5f64..10.0,
+            flip in any::<bool>(),
+            depth in 0.1f64..8.0,
+            along in prop::array::uniform3(-5.0f64..5.0),
+            shift in -3.0f64..3.0,
+        ) {
+            let normal = Vector3::from(n);
+            prop_assume!(normal.norm() > 0.1);
+            let normal = normal.normalize();
+            let sign = if flip { -1.0 } else { 1.0 };
+            let plane = Plane { normal: normal * sign, d: d * sign };
+            // The pane's foot nearest the sensor, a point on it, one behind.
+            let foot = Point3::from(-normal * d);
+            let on = foot + (Vector3::from(along) - normal * normal.dot(&Vector3::from(along)));
+            let behind = on - normal * depth;
+            prop_assert!(plane.signed_distance(&behind) * plane.d < 0.0);
+            let image = plane.mirror(&behind);
+            let moved = moved_off(&plane, &image, shift);
+            let from_pane = |p: &Point3<f64>| plane.facing(&Point3::origin()).signed_distance(p);
+            prop_assert!((from_pane(&moved) - (depth + shift)).abs() < 1e-9);
+            prop_assert!((moved_off(&plane, &moved, -shift) - image).norm() < 1e-9);
+        }
     }
 }

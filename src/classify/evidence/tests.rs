@@ -8,7 +8,7 @@ use crate::classify::boundary::BeamPlanes;
 use crate::classify::decide::tests::{frame, pane, room_space, split, two_panes};
 use crate::classify::decide::{BeamHits, DecisionParams};
 use crate::classify::weighed::{decide_weighed, FrameContext};
-use crate::classify::{Class, Decisions};
+use crate::classify::{Class, Decisions, SurfaceSupport};
 use crate::reflect::BoundedPlane;
 use crate::sensor::{OrganizedScan, SensorModel};
 
@@ -25,6 +25,17 @@ fn weighed_at(
     planes: &[BoundedPlane],
     weighing: &Weighing,
 ) -> Decisions {
+    weighed_seeing(points, intensity, planes, weighing, None)
+}
+
+/// [`weighed_at`] with the surfaces `seen` directly (sensor frame).
+fn weighed_seeing(
+    points: &[[f32; 3]],
+    intensity: f32,
+    planes: &[BoundedPlane],
+    weighing: &Weighing,
+    seen: Option<&dyn SurfaceSupport>,
+) -> Decisions {
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     let f = frame(points, intensity);
     let scan = OrganizedScan::build(&f, &sensor).unwrap();
@@ -39,7 +50,7 @@ fn weighed_at(
         sensor: &sensor,
         bounded: planes,
         hits: &hits,
-        support: None,
+        support: seen,
         space: Some(&view),
     };
     decide_weighed(&ctx, &params, weighing)
@@ -217,10 +228,6 @@ fn unknown_tests_and_bad_thresholds_are_refused() {
         ..WeighingParams::default()
     })
     .is_err());
-    // The default weighs known tests, the image support not among them
-    // (wrong more often than right on the development split).
-    let names = Weighing::default().test_names().join(" ");
-    assert!(!names.contains("image-support"), "{names}");
     assert!(Weighing::default()
         .test_names()
         .iter()
@@ -261,4 +268,70 @@ fn a_floor_running_on_behind_glass_makes_its_points_real() {
     planes[0].mirror_probability = Some(1.0);
     let d = weighed(&point, &planes, &weighing);
     assert_eq!(d.classes, [Class::Reflection]);
+}
+
+/// Surface points seen directly (sensor frame).
+struct Seen(Vec<Point3<f64>>);
+
+impl SurfaceSupport for Seen {
+    fn near(&self, p: &Point3<f64>, radius: f64) -> bool {
+        self.0.iter().any(|q| (q - p).norm() <= radius)
+    }
+}
+
+/// A wall seen directly at `x` = const (`along_x` false) or `y` = const
+/// (`along_x` true, running from x = -3 to the pane), sampled every 0.1 m.
+fn wall(at: f64, along_x: bool) -> Seen {
+    let mut points = Vec::new();
+    for i in -30..=50 {
+        for k in -10..=15 {
+            let (u, z) = (i as f64 * 0.1, k as f64 * 0.1);
+            points.push(match along_x {
+                false if u.abs() <= 2.0 => Point3::new(at, u, z),
+                false => continue,
+                true if u < 5.0 => Point3::new(u, at, z),
+                true => continue,
+            });
+        }
+    }
+    Seen(points)
+}
+
+/// A mirror image on the room's far wall, which it leaves when moved 1 m
+/// along the normal, supports a reflection, at the odds of the test's two
+/// rates; an image on a side wall running along the normal stays on it
+/// when moved and says nothing, as does an image in front of no surface.
+#[test]
+fn an_image_landing_only_where_mirrored_supports_a_reflection() {
+    let planes = pane();
+    let test = only(&["image-support"]);
+    let far = wall(-3.0, false);
+    // 8 m behind the pane at x = 5: its image is on the far wall at x = -3.
+    let behind = [[13.0f32, 0.2, 0.3]];
+    let d = weighed_seeing(&behind, 10.0, &planes, &test, Some(&far));
+    assert_eq!(d.classes, [Class::Reflection]);
+    assert_eq!(d.rules, [Rule::Support]);
+    let rates = ImageSupport::default();
+    let odds = rates.reflection_rate / rates.chance_rate;
+    let expected = odds / (1.0 + odds);
+    assert!(
+        (d.confidence[0] as f64 - expected).abs() < 1e-5,
+        "{:?}",
+        d.confidence
+    );
+    // 3 m behind: its image at x = 2 is on no surface.
+    let nearer = [[8.0f32, 0.2, 0.3]];
+    let d = weighed_seeing(&nearer, 10.0, &planes, &test, Some(&far));
+    assert_eq!(d.classes, [Class::Unclassified]);
+    // On a side wall at y = 1.5 the image stays on the wall when moved.
+    let side = wall(1.5, true);
+    let beside = [[8.0f32, 1.5, 0.3]];
+    let d = weighed_seeing(&beside, 10.0, &planes, &test, Some(&side));
+    assert_eq!(d.classes, [Class::Unclassified]);
+    // Where a surface was seen at the measured position, the image says
+    // nothing either (the seen-surface test weighs that).
+    let mut both = far.0.clone();
+    both.push(Point3::new(13.0, 0.2, 0.3));
+    let d = weighed_seeing(&behind, 10.0, &planes, &test, Some(&Seen(both)));
+    assert_eq!(d.classes, [Class::Unclassified]);
 }

@@ -46,7 +46,11 @@ impl Weighing {
             tests.push(match name.as_str() {
                 "seen-space" => Box::new(params.seen_space) as Box<dyn EvidenceTest>,
                 "seen-surface" => Box::new(params.seen_surface),
-                "image-support" => Box::new(params.image_support),
+                "image-support" => Box::new(
+                    params
+                        .image_support
+                        .test(params.seen_space, params.level_surface.tolerance),
+                ),
                 "frame-free-space" => Box::new(params.frame_free_space),
                 "depth" => Box::new(params.depth),
                 "echo-strength" => Box::new(params.echo_strength),
