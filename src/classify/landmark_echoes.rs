@@ -6,6 +6,8 @@
 //! sums these over the keyframes; the tests they rest on are the
 //! classifier's, so they live here.
 
+use std::cell::OnceCell;
+
 use nalgebra::Point3;
 
 use super::boundary::BeamPlanes;
@@ -178,10 +180,11 @@ impl EchoCounting<'_> {
         let landing = ImageLanding {
             space: view.space,
             seen: view.seen,
+            position: pos,
+            seen_at_position: OnceCell::new(),
             seen_space: &self.params.weighing.seen_space,
             level_tolerance: self.params.weighing.level_surface.tolerance,
             plane: &view.planes[h.plane].plane,
-            position: pos,
             crossing: Point3::from(pos.coords * (h.range / pos.coords.norm())),
             range: pos.coords.norm(),
         };

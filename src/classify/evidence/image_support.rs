@@ -1,13 +1,15 @@
 //! The mirror image lands on a surface seen directly, and only there.
 
+use std::cell::OnceCell;
+
 use nalgebra::{Point3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::seen_space::SUPPORT_RADIUS;
+use super::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
 use super::{BehindPoint, EvidenceTest, SeenSpace};
 use crate::classify::decide::SurfaceSupport;
 use crate::classify::rule::Rule;
-use crate::classify::space::SensorFrameSpace;
+use crate::classify::space::{Occupancy, SensorFrameSpace};
 use crate::geometry::Plane;
 use crate::map::glass_or_mirror::IMAGE_NULL_SHIFTS;
 
@@ -76,10 +78,11 @@ impl EvidenceTest for ImageSupportTest {
         let landing = ImageLanding {
             space,
             seen: point.support,
+            position: point.position,
+            seen_at_position: OnceCell::new(),
             seen_space: &self.seen_space,
             level_tolerance: self.level_tolerance,
             plane: &point.landmark.plane,
-            position: point.position,
             crossing: point.crossing_point(),
             range: point.range,
         };
@@ -101,6 +104,12 @@ pub(crate) struct ImageLanding<'a> {
     pub space: &'a SensorFrameSpace<'a>,
     /// The surfaces seen directly, when gathered.
     pub seen: Option<&'a dyn SurfaceSupport>,
+    /// Where the point was measured.
+    pub position: Point3<f64>,
+    /// Whether a surface was seen there (within [`SUPPORT_RADIUS`]): then
+    /// no image lands, the point's own surface being as likely where it
+    /// is. Asked once, and only of a point with an image on a surface.
+    pub seen_at_position: OnceCell<bool>,
     /// When a hypothesis's path is refuted.
     pub seen_space: &'a SeenSpace,
     /// Within this of a floor's or ceiling's height an image says nothing,
@@ -109,8 +118,6 @@ pub(crate) struct ImageLanding<'a> {
     pub level_tolerance: f64,
     /// The landmark (facing the sensor).
     pub plane: &'a Plane,
-    /// Where the point was measured.
-    pub position: Point3<f64>,
     /// Where its beam crossed the landmark.
     pub crossing: Point3<f64>,
     /// Its range, m.
@@ -133,17 +140,26 @@ impl ImageLanding<'_> {
     /// Whether `image` lies on a surface seen directly where none was seen
     /// at the measured position, not at a floor's or ceiling's height.
     pub fn on_seen_surface(&self, image: &Point3<f64>) -> bool {
-        self.seen.is_some_and(|s| {
-            !s.near(&self.position, SUPPORT_RADIUS)
-                && self.space.level_of(image, self.level_tolerance).is_none()
-                && s.near(image, SUPPORT_RADIUS)
-        })
+        let Some(seen) = self.seen else {
+            return false;
+        };
+        self.space.level_of(image, self.level_tolerance).is_none()
+            && seen.near(image, SUPPORT_RADIUS)
+            && !*self
+                .seen_at_position
+                .get_or_init(|| seen.near(&self.position, SUPPORT_RADIUS))
     }
 
     /// Whether `image` lands on a seen surface by a path the seen space
-    /// does not refute.
+    /// does not refute. A path towards a seen surface is refuted only by
+    /// its end in space seen free (`leg_refuted`), the cheapest of the
+    /// checks, which goes first: most images land in the room, seen free.
     pub fn lands(&self, image: &Point3<f64>) -> bool {
-        self.on_seen_surface(image) && !self.refuted(image)
+        let clearance = CLEARANCE_RATIO * self.range;
+        let lands = self.space.occupancy_clear_of(image, clearance) != Occupancy::Free
+            && self.on_seen_surface(image);
+        debug_assert_eq!(lands, self.on_seen_surface(image) && !self.refuted(image));
+        lands
     }
 }
 
