@@ -71,6 +71,10 @@ impl EvidenceTest for ImageSupportTest {
         Rule::Support
     }
 
+    fn is_likelihood_ratio(&self) -> bool {
+        true
+    }
+
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let space = point
             .space

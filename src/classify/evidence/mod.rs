@@ -55,6 +55,16 @@ pub trait EvidenceTest: Send + Sync + std::fmt::Debug {
         Rule::Weighed
     }
 
+    /// Whether the weight is a likelihood ratio proper, its two rates
+    /// measured over every point behind a landmark: it then adds to the
+    /// landmark's own share of reflections, the prior of the points no
+    /// test weighs. A test whose weight is the log-odds of its error rate
+    /// measured alone carries the development split's base rate in it, and
+    /// adds to even odds instead.
+    fn is_likelihood_ratio(&self) -> bool {
+        false
+    }
+
     /// The log-likelihood ratio of this test's observation of `point`.
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64>;
 }

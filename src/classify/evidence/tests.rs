@@ -299,7 +299,7 @@ fn wall(at: f64, along_x: bool) -> Seen {
 
 /// A mirror image on the room's far wall, which it leaves when moved 1 m
 /// along the normal, supports a reflection, at the odds of the test's two
-/// rates; an image on a side wall running along the normal stays on it
+/// rates times the landmark's share; an image on a side wall running along the normal stays on it
 /// when moved and says nothing, as does an image in front of no surface.
 #[test]
 fn an_image_landing_only_where_mirrored_supports_a_reflection() {
@@ -328,6 +328,21 @@ fn an_image_landing_only_where_mirrored_supports_a_reflection() {
     let beside = [[8.0f32, 1.5, 0.3]];
     let d = weighed_seeing(&beside, 10.0, &planes, &test, Some(&side));
     assert_eq!(d.classes, [Class::Unclassified]);
+    // Its weight is a likelihood ratio: behind glass whose decided share
+    // is 1 %, it adds to that share, not to even odds, and leaves the
+    // point real.
+    let mut rare = planes.clone();
+    rare[0].mirror_probability = Some(0.0);
+    rare[0].decided_share = Some(0.01);
+    let d = weighed_seeing(&behind, 10.0, &rare, &test, Some(&far));
+    assert_eq!(d.classes, [Class::Obstacle]);
+    let prior_odds = 0.01 / 0.99;
+    let expected = 1.0 / (1.0 + prior_odds * odds);
+    assert!(
+        (d.confidence[0] as f64 - expected).abs() < 1e-5,
+        "{:?}",
+        d.confidence
+    );
     // Where a surface was seen at the measured position, the image says
     // nothing either (the seen-surface test weighs that).
     let mut both = far.0.clone();

@@ -135,7 +135,7 @@ impl Weighing {
             let Some(llr) = test.weigh(point).filter(|l| l.is_finite()) else {
                 continue;
             };
-            weighed |= llr != 0.0;
+            weighed |= llr != 0.0 && !test.is_likelihood_ratio();
             evidence += llr;
             if llr > best_for.0 {
                 best_for = (llr, test.rule());
