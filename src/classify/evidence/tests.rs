@@ -7,6 +7,7 @@ use super::*;
 use crate::classify::boundary::BeamPlanes;
 use crate::classify::decide::tests::{frame, pane, room_space, split, two_panes};
 use crate::classify::decide::{BeamHits, DecisionParams};
+use crate::classify::evidence::ImageLanding;
 use crate::classify::weighed::{decide_weighed, FrameContext};
 use crate::classify::{Class, Decisions, SurfaceSupport};
 use crate::reflect::BoundedPlane;
@@ -349,4 +350,52 @@ fn an_image_landing_only_where_mirrored_supports_a_reflection() {
     both.push(Point3::new(13.0, 0.2, 0.3));
     let d = weighed_seeing(&behind, 10.0, &planes, &test, Some(&Seen(both)));
     assert_eq!(d.classes, [Class::Unclassified]);
+}
+
+/// [`ImageLanding::lands`] checks only the end of the path seen free, as
+/// the full seen-space test ([`ImageLanding::refuted`]) decides a path
+/// towards a seen surface: the two agree on a grid of images around the
+/// room's far wall, in front of it, behind it and in the room seen free,
+/// where a thin post was seen.
+#[test]
+fn a_landing_is_refuted_only_by_its_end_seen_free() {
+    let planes = pane();
+    let space = room_space();
+    let view = space.in_sensor_frame(Isometry3::identity());
+    // The far wall, and a thin post in the room that the space map holds
+    // as seen free (images there are refuted).
+    let mut far = wall(-3.0, false);
+    far.0.push(Point3::new(0.0, 0.0, 0.3));
+    let seen_space = SeenSpace::default();
+    let (mut landed, mut refuted) = (0, 0);
+    for (px, py) in [(13.0, 0.2), (9.0, -1.0), (7.0, 1.5)] {
+        let position = Point3::new(px, py, 0.3);
+        let range = position.coords.norm();
+        let landing = ImageLanding {
+            space: &view,
+            seen: Some(&far),
+            position,
+            seen_at_position: std::cell::OnceCell::new(),
+            seen_space: &seen_space,
+            level_tolerance: 0.1,
+            plane: &planes[0].plane,
+            crossing: Point3::from(position.coords * (5.0 / px)),
+            range,
+        };
+        for i in 0..=40 {
+            for j in -8..=8 {
+                let image = Point3::new(-5.0 + i as f64 * 0.25, j as f64 * 0.25, 0.3);
+                let on = landing.on_seen_surface(&image);
+                let full = on && !landing.refuted(&image);
+                assert_eq!(landing.lands(&image), full, "{image}");
+                landed += full as usize;
+                refuted += (on && !full) as usize;
+            }
+        }
+    }
+    // Both outcomes occur: the grid tests the shortcut.
+    assert!(
+        landed > 0 && refuted > 0,
+        "{landed} landed, {refuted} refuted"
+    );
 }
