@@ -177,6 +177,7 @@ impl EchoCounting<'_> {
         strength: f64,
         stats: &mut BehindEchoes,
     ) {
+        let range = pos.coords.norm();
         let landing = ImageLanding {
             space: view.space,
             seen: view.seen,
@@ -185,8 +186,8 @@ impl EchoCounting<'_> {
             seen_space: &self.params.weighing.seen_space,
             level_tolerance: self.params.weighing.level_surface.tolerance,
             plane: &view.planes[h.plane].plane,
-            crossing: Point3::from(pos.coords * (h.range / pos.coords.norm())),
-            range: pos.coords.norm(),
+            crossing: Point3::from(pos.coords * (h.range / range)),
+            range,
         };
         // Every echo's image moved off the mirror position: how often such
         // images land on a seen surface by chance. Counted over every echo

@@ -2,7 +2,7 @@
 
 use std::cell::OnceCell;
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
@@ -46,8 +46,9 @@ impl ImageSupport {
     /// height, m), so that it decides landings as the landmark's
     /// chance-landing count does.
     pub fn test(self, seen_space: SeenSpace, level_tolerance: f64) -> ImageSupportTest {
+        let rate = |r: f64| r.clamp(1e-6, 1.0);
         ImageSupportTest {
-            params: self,
+            weight: (rate(self.reflection_rate) / rate(self.chance_rate)).ln(),
             seen_space,
             level_tolerance,
         }
@@ -57,7 +58,8 @@ impl ImageSupport {
 /// [`ImageSupport`] ready to weigh.
 #[derive(Debug, Clone, Copy)]
 pub struct ImageSupportTest {
-    params: ImageSupport,
+    /// The log-likelihood ratio of a specific landing.
+    weight: f64,
     seen_space: SeenSpace,
     level_tolerance: f64,
 }
@@ -94,8 +96,7 @@ impl EvidenceTest for ImageSupportTest {
             && IMAGE_NULL_SHIFTS
                 .iter()
                 .all(|&s| !landing.lands(&moved_off(landing.plane, &point.mirrored, s)));
-        let rate = |r: f64| r.clamp(1e-6, 1.0);
-        specific.then(|| (rate(self.params.reflection_rate) / rate(self.params.chance_rate)).ln())
+        specific.then_some(self.weight)
     }
 }
 
@@ -169,17 +170,13 @@ impl ImageLanding<'_> {
 /// `plane`'s normal, away from the pane into the sensor's side where
 /// `shift` is positive, towards the pane (and past it) where negative.
 pub(crate) fn moved_off(plane: &Plane, image: &Point3<f64>, shift: f64) -> Point3<f64> {
-    image + facing_normal(plane) * shift
-}
-
-/// `plane`'s normal towards the sensor (the origin).
-fn facing_normal(plane: &Plane) -> Vector3<f64> {
-    plane.facing(&Point3::origin()).normal
+    image + plane.facing(&Point3::origin()).normal * shift
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Vector3;
     use proptest::prelude::*;
 
     proptest! {
