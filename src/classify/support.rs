@@ -6,8 +6,9 @@
 //! of a surface seen from elsewhere in the sequence is recognised too.
 //!
 //! The points are thinned to one per small voxel and bucketed in cubes as
-//! large as the query radius, so "is there a point within r" inspects at most
-//! 8 buckets; building it is two linear passes (no tree to balance), which
+//! large as the query radius, so "is there a point within r" inspects the
+//! cubes of at most nine columns (one hash lookup per column, cubes wholly
+//! beyond r skipped); building it is two linear passes (no tree to balance), which
 //! matters because it is rebuilt for every run over all frames. The buckets
 //! are ranges of one flat array (a counting sort), not a vector each.
 //!
@@ -28,6 +29,13 @@ pub struct WorldSupport {
     radius: f64,
     /// Bucket key (packed cube of edge `radius`) to bucket number.
     buckets: FxHashMap<u64, u32>,
+    /// The cubes of each column of cubes (same x and y), by column key
+    /// ([`column_key`]): a range of `column_cubes`.
+    columns: FxHashMap<u64, (u32, u32)>,
+    /// Every cube's z index and bucket, column by column, z ascending: a
+    /// ball query asks the hash for its (at most nine) columns, not for each
+    /// of its (up to 27) cubes.
+    column_cubes: Vec<(i32, u32)>,
     /// Bucket `b` holds `points[starts[b]..starts[b + 1]]`.
     starts: Vec<u32>,
     points: Vec<[f32; 3]>,
@@ -74,6 +82,29 @@ fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
 fn bucket_key(c: [i64; 3]) -> u64 {
     let m = (1u64 << 21) - 1;
     (c[0] as u64 & m) | ((c[1] as u64 & m) << 21) | ((c[2] as u64 & m) << 42)
+}
+
+/// The key of the column of cubes at `x`, `y` (any z): the x and y bits of
+/// [`bucket_key`].
+#[inline]
+fn column_key(x: i64, y: i64) -> u64 {
+    bucket_key([x, y, 0])
+}
+
+/// The cube index along one axis back from a [`bucket_key`]'s 21 bits
+/// (sign-extended).
+#[inline]
+fn axis_of_key(bits: u64) -> i64 {
+    ((bits << 43) as i64) >> 43
+}
+
+/// Squared distance from `v` to the interval `[c, c + 1) * size` along one
+/// axis: 0 inside it.
+#[inline]
+fn gap2(v: f64, c: i64, size: f64) -> f64 {
+    let lo = c as f64 * size;
+    let g = (lo - v).max(v - (lo + size)).max(0.0);
+    g * g
 }
 
 /// Builds a [`WorldSupport`] from points offered a frame at a time: what it
@@ -172,8 +203,26 @@ impl SupportBuilder {
             views[*slot as usize] = v;
             *slot += 1;
         }
+        let m = (1u64 << 21) - 1;
+        let mut cubes: Vec<(u64, i64, u32)> = self
+            .buckets
+            .iter()
+            .map(|(&key, &b)| (key & ((1u64 << 42) - 1), axis_of_key((key >> 42) & m), b))
+            .collect();
+        cubes.sort_unstable();
+        let mut columns = FxHashMap::default();
+        let mut column_cubes = Vec::with_capacity(cubes.len());
+        for (k, (column, z, b)) in cubes.iter().enumerate() {
+            if k == 0 || cubes[k - 1].0 != *column {
+                columns.insert(*column, (k as u32, 0));
+            }
+            columns.get_mut(column).expect("inserted above").1 += 1;
+            column_cubes.push((*z as i32, *b));
+        }
         WorldSupport {
             radius: self.radius,
+            columns,
+            column_cubes,
             buckets: self.buckets,
             starts,
             points: flat,
@@ -312,23 +361,42 @@ impl WorldSupport {
         // The cube holding `c` first: the nearest points are most often
         // there, and a search that stops at one stops soonest.
         let home = xyz.map(|v| floor_i64(v * inv));
-        let mut visit = |cube: [i64; 3]| {
-            let Some(&b) = self.buckets.get(&bucket_key(cube)) else {
-                return false;
-            };
+        let mut visit_bucket = |b: u32| {
             let start = self.starts[b as usize] as usize;
             let end = self.starts[b as usize + 1] as usize;
             (start..end)
                 .zip(&self.points[start..end])
                 .any(|(i, point)| f(i, point))
         };
-        if visit(home) {
-            return true;
+        if let Some(&b) = self.buckets.get(&bucket_key(home)) {
+            if visit_bucket(b) {
+                return true;
+            }
         }
+        // Then the others in x, y, z order, each column found once and the
+        // cubes wholly beyond `reach` skipped (a little margin for the
+        // points' f32 rounding).
+        let (size, reach2) = (self.radius, (reach + 1e-4) * (reach + 1e-4));
         for cx in lo[0]..=hi[0] {
+            let gx = gap2(xyz[0], cx, size);
             for cy in lo[1]..=hi[1] {
-                for cz in lo[2]..=hi[2] {
-                    if [cx, cy, cz] != home && visit([cx, cy, cz]) {
+                let gxy = gx + gap2(xyz[1], cy, size);
+                if gxy > reach2 {
+                    continue;
+                }
+                let Some(&(start, len)) = self.columns.get(&column_key(cx, cy)) else {
+                    continue;
+                };
+                let column = &self.column_cubes[start as usize..(start + len) as usize];
+                for &(cz, b) in column {
+                    let cz = i64::from(cz);
+                    if cz > hi[2] {
+                        break;
+                    }
+                    if cz < lo[2] || [cx, cy, cz] == home || gxy + gap2(xyz[2], cz, size) > reach2 {
+                        continue;
+                    }
+                    if visit_bucket(b) {
                         return true;
                     }
                 }

@@ -255,6 +255,27 @@ impl ConvexPolygon {
         }
     }
 
+    /// Whether `p` lies within `margin` of the polygon: `signed_distance(p)
+    /// <= margin`, without the distances to the edges where the edge lines
+    /// already decide (a point farther than `margin` outside one edge's line
+    /// is farther than that from the polygon).
+    pub fn within(&self, p: &Point2<f64>, margin: f64) -> bool {
+        if self.is_empty() {
+            return f64::INFINITY <= margin;
+        }
+        let max_line = self
+            .edges()
+            .filter_map(|(a, b)| outward_normal(a, b).map(|n| n.dot(&(p - a))))
+            .fold(f64::NEG_INFINITY, f64::max);
+        if max_line <= 0.0 || max_line > margin {
+            return max_line <= margin;
+        }
+        self.edges()
+            .map(|(a, b)| segment_distance(p, a, b))
+            .fold(f64::INFINITY, f64::min)
+            <= margin
+    }
+
     /// The intersection of two convex polygons (possibly empty).
     ///
     /// Sutherland–Hodgman: `self` clipped by every edge half-plane of
@@ -427,6 +448,20 @@ mod tests {
         }
         for v in needle.vertices() {
             assert!(g.signed_distance(v) <= -1.0 + 1e-9);
+        }
+    }
+
+    proptest::proptest! {
+        /// `within` is `signed_distance <= margin`, its shortcut included.
+        #[test]
+        fn within_is_the_signed_distance_against_the_margin(
+            pts in proptest::collection::vec((-5.0f64..5.0, -5.0f64..5.0), 3..12),
+            q in (-8.0f64..8.0, -8.0f64..8.0),
+            margin in -1.0f64..3.0,
+        ) {
+            let hull = ConvexPolygon::hull(&pts.iter().map(|&(x, y)| p(x, y)).collect::<Vec<_>>());
+            let q = p(q.0, q.1);
+            proptest::prop_assert_eq!(hull.within(&q, margin), hull.signed_distance(&q) <= margin);
         }
     }
 }

@@ -114,6 +114,9 @@ impl Default for InputParams {
 struct FrameCache {
     frames: Vec<OnceLock<Frame>>,
     scans: Vec<OnceLock<OrganizedScan>>,
+    /// Per frame, whether its points carry times (asked at every pass,
+    /// answered once: an untimed frame is a scan of all its points).
+    timed: Vec<OnceLock<bool>>,
     budget: usize,
     used: AtomicUsize,
 }
@@ -123,6 +126,7 @@ impl FrameCache {
         Self {
             frames: (0..frames).map(|_| OnceLock::new()).collect(),
             scans: (0..frames).map(|_| OnceLock::new()).collect(),
+            timed: (0..frames).map(|_| OnceLock::new()).collect(),
             budget,
             used: AtomicUsize::new(0),
         }
@@ -236,14 +240,16 @@ impl Sequence {
     /// Whether frame `index` (`frame`, as read) is handed out deskewed:
     /// it carries per-point times, the sequence has poses and deskewing
     /// is on.
-    fn deskews(&self, frame: &Frame) -> bool {
-        self.deskew && self.poses.is_some() && crate::slam::deskew::is_timed(frame)
+    fn deskews(&self, index: usize, frame: &Frame) -> bool {
+        self.deskew
+            && self.poses.is_some()
+            && *self.cache.timed[index].get_or_init(|| crate::slam::deskew::is_timed(frame))
     }
 
     /// `frame` (frame `index` as read) deskewed with the velocity of the
     /// sequence's poses when [`deskews`](Self::deskews) says so.
     fn deskewed<'a>(&self, index: usize, frame: Cow<'a, Frame>) -> Cow<'a, Frame> {
-        if !self.deskews(&frame) {
+        if !self.deskews(index, &frame) {
             return frame;
         }
         let Some(poses) = &self.poses else {
@@ -410,7 +416,7 @@ impl Sequence {
     /// points' directions are their beams' (the grid cells of an
     /// [`OrganizedScan`]); the points are the same, in the same order.
     pub fn as_measured<'a>(&'a self, index: usize, frame: &'a Frame) -> Result<Cow<'a, Frame>> {
-        if !self.deskews(frame) {
+        if !self.deskews(index, frame) {
             return Ok(Cow::Borrowed(frame));
         }
         Ok(self.fetch_as_read(index)?.0)

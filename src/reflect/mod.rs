@@ -111,7 +111,7 @@ impl BoundedPlane {
                 if margin == 0.0 {
                     p.contains(&uv)
                 } else {
-                    p.signed_distance(&uv) <= margin
+                    p.within(&uv, margin)
                 }
             });
         }
@@ -123,7 +123,7 @@ impl BoundedPlane {
         if margin == 0.0 {
             self.boundary.contains(&uv)
         } else {
-            self.boundary.signed_distance(&uv) <= margin
+            self.boundary.within(&uv, margin)
         }
     }
 
