@@ -221,7 +221,7 @@ pub(super) fn vote_frame(
             // A beam through the plane: glass, or open space where the plane
             // has no surface at all. Only near the landmark's own boundary
             // (where dual returns found the surface) does it count.
-            if plane.boundary.within(&c.uv, p.pass_margin) {
+            if plane.boundary.signed_distance(&c.uv) <= p.pass_margin {
                 grid.vote(&c.uv, 1, 0);
             } else {
                 grid.vote_open(&c.uv);
