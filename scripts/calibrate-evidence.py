@@ -3,7 +3,7 @@ import json,glob,collections,sys
 OUT=sys.argv[1] if len(sys.argv)>1 else '/tmp/calibrate-evidence'
 rule_of={'seen-space':['real-refuted','mirror-refuted'],'seen-surface':['seen-surface'],'image-support':['support'],
  'frame-free-space':['frame-free-space'],'depth':['depth'],'echo-strength':['echo-strength'],'echo-order':['dual-return'],
- 'level-surface':['level-surface']}
+ 'level-surface':['level-surface'],'seen-through':['seen-through']}
 for t,rules in rule_of.items():
     fr=collections.Counter(); fo=collections.Counter(); fams=collections.defaultdict(lambda:[0,0,0,0])
     for m in glob.glob(f'{OUT}/o-{t}-*/metrics.json'):

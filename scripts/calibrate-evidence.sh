@@ -9,7 +9,7 @@ set -euo pipefail
 OUT=${1:-/tmp/calibrate-evidence}
 BIN=${BIN:-target/release/specular}
 mkdir -p "$OUT"
-for t in ${TESTS:-seen-space seen-surface image-support frame-free-space depth echo-strength echo-order level-surface}; do
+for t in ${TESTS:-seen-space seen-surface image-support frame-free-space depth echo-strength echo-order level-surface seen-through}; do
   printf '[plane_map.weighing]\ntests = ["%s"]\n' "$t" > "$OUT/$t.toml"
   for f in $("$BIN" simulate --list-families); do
     for s in 0 1; do

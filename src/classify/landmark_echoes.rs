@@ -18,6 +18,7 @@ use super::plane_map::{PlaneMapClassifier, PlaneMapParams};
 use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
 use super::FrameInput;
+use crate::map::glass_or_mirror::ThroughBeam;
 use crate::map::glass_or_mirror::IMAGE_NULL_SHIFTS;
 use crate::map::BehindEchoes;
 use crate::reflect::echo_split::echo_strength;
@@ -203,6 +204,13 @@ impl EchoCounting<'_> {
             // space, its measured position not.
             if !landing.refuted(&pos) {
                 stats.transmitted.add(strength);
+                let pose = &view.input.pose;
+                let (a, b) = (pose * landing.crossing, pose * pos);
+                stats.through.push(ThroughBeam {
+                    start: [a.x as f32, a.y as f32, a.z as f32],
+                    end: [b.x as f32, b.y as f32, b.z as f32],
+                    range: range as f32,
+                });
                 if let Some(k) = view.space.level_of(&pos, landing.level_tolerance) {
                     *stats.at_level(k) += 1;
                 }

@@ -67,10 +67,13 @@ pub enum Rule {
     /// Weighed: the point lies at the height of a floor or ceiling seen
     /// directly, which runs on behind the glass.
     LevelSurface = 19,
+    /// Weighed: where the point was measured, beams seen through the same
+    /// glass passed (confirmed transmissions): Reflection.
+    SeenThrough = 20,
 }
 
 /// Every rule, in id order.
-pub const RULES: [Rule; 20] = [
+pub const RULES: [Rule; 21] = [
     Rule::Undecided,
     Rule::NoPane,
     Rule::InFront,
@@ -91,6 +94,7 @@ pub const RULES: [Rule; 20] = [
     Rule::Weighed,
     Rule::Prior,
     Rule::LevelSurface,
+    Rule::SeenThrough,
 ];
 
 impl Rule {
@@ -122,6 +126,7 @@ impl Rule {
             Rule::Weighed => "weighed",
             Rule::Prior => "prior",
             Rule::LevelSurface => "level-surface",
+            Rule::SeenThrough => "seen-through",
         }
     }
 }

@@ -211,6 +211,7 @@ fn section_defaults_are_the_default_file() {
         "plane_map.weighing.echo_strength",
         "plane_map.weighing.echo_order",
         "plane_map.weighing.level_surface",
+        "plane_map.weighing.seen_through",
     ]);
     fn tables(t: &toml::Table, prefix: &str, out: &mut Vec<String>) {
         for (k, v) in t {

@@ -79,6 +79,24 @@ pub struct BehindEchoes {
     /// Of the confirmed transmissions, how many ended at each level (floor
     /// or ceiling) seen directly, by the level's index.
     pub transmitted_at_level: Vec<u64>,
+    /// One frame's confirmed transmissions, as beams behind the pane (what
+    /// a transmitted beam crossed is empty): carved into the space seen
+    /// through glass frame by frame, not summed ([`BehindEchoes::merge`]
+    /// leaves them).
+    pub through: Vec<ThroughBeam>,
+}
+
+/// A confirmed transmission's beam behind its pane, world frame: from where
+/// it crossed the pane to where it ended, and the echo's range from the
+/// sensor (a beam stops short of its end in proportion, as direct ones do).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ThroughBeam {
+    /// Where the beam crossed the pane.
+    pub start: [f32; 3],
+    /// Where it ended (the echo).
+    pub end: [f32; 3],
+    /// The echo's range, m.
+    pub range: f32,
 }
 
 impl BehindEchoes {

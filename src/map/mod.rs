@@ -21,7 +21,9 @@ pub use evidence::{
     EvidenceGatherer, EvidenceParams, EvidenceTotal, FrameVotes,
 };
 pub use ghosts::{find_ghosts, Ghost, GhostParams};
-pub use glass_or_mirror::{glass_or_mirror, BehindEchoes, GlassOrMirror, MirrorParams};
+pub use glass_or_mirror::{
+    glass_or_mirror, BehindEchoes, GlassOrMirror, MirrorParams, ThroughBeam,
+};
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};

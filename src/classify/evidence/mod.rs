@@ -22,6 +22,7 @@ mod params;
 mod point;
 pub mod seen_space;
 mod seen_surface;
+mod seen_through;
 mod weighing;
 
 pub use self::depth::Depth;
@@ -35,6 +36,7 @@ pub use self::params::{WeighingParams, TEST_NAMES};
 pub use self::point::BehindPoint;
 pub use self::seen_space::SeenSpace;
 pub use self::seen_surface::SeenSurface;
+pub use self::seen_through::SeenThrough;
 pub use self::weighing::{Posterior, Weighing};
 
 use crate::classify::rule::Rule;

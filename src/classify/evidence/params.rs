@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{
     Depth, EchoOrder, EchoStrength, FrameFreeSpace, ImageSupport, LevelSurface, SeenSpace,
-    SeenSurface,
+    SeenSurface, SeenThrough,
 };
 
 /// Parameters of the evidence weighing behind reflective landmarks
@@ -14,7 +14,7 @@ use super::{
 pub struct WeighingParams {
     /// The tests weighed, by name: `seen-space`, `seen-surface`,
     /// `image-support`, `frame-free-space`, `depth`, `echo-strength`,
-    /// `echo-order`, `level-surface`.
+    /// `echo-order`, `level-surface`, `seen-through`.
     pub tests: Vec<String>,
     /// The posterior a class needs to be given; a point whose posterior
     /// falls short either way stays unclassified (probability, 0.5-1).
@@ -38,10 +38,12 @@ pub struct WeighingParams {
     pub echo_order: EchoOrder,
     /// The level-surface test's parameters.
     pub level_surface: LevelSurface,
+    /// The seen-through test's parameters.
+    pub seen_through: SeenThrough,
 }
 
 /// Every built-in test's name, in the order they are weighed.
-pub const TEST_NAMES: [&str; 8] = [
+pub const TEST_NAMES: [&str; 9] = [
     "seen-space",
     "seen-surface",
     "image-support",
@@ -50,6 +52,7 @@ pub const TEST_NAMES: [&str; 8] = [
     "echo-strength",
     "echo-order",
     "level-surface",
+    "seen-through",
 ];
 
 /// The values of `configs/default.toml`.

@@ -37,13 +37,24 @@ fn weighed_seeing(
     weighing: &Weighing,
     seen: Option<&dyn SurfaceSupport>,
 ) -> Decisions {
+    weighed_in(points, intensity, planes, weighing, seen, &room_space())
+}
+
+/// [`weighed_seeing`] with the space seen `space`.
+fn weighed_in(
+    points: &[[f32; 3]],
+    intensity: f32,
+    planes: &[BoundedPlane],
+    weighing: &Weighing,
+    seen: Option<&dyn SurfaceSupport>,
+    space: &crate::classify::SpaceMap,
+) -> Decisions {
     let sensor = SensorModel::resolve("pandar_qt64").unwrap();
     let f = frame(points, intensity);
     let scan = OrganizedScan::build(&f, &sensor).unwrap();
     let params = DecisionParams::default();
     let beams = BeamPlanes::hulls(planes, 0.0);
     let hits = BeamHits::compute(&f, &scan, &beams, params.glass_distance);
-    let space = room_space();
     let view = space.in_sensor_frame(Isometry3::identity());
     let ctx = FrameContext {
         frame: &f,
@@ -399,3 +410,32 @@ fn a_landing_is_refuted_only_by_its_end_seen_free() {
         "{landed} landed, {refuted} refuted"
     );
 }
+
+/// Where beams seen through the pane passed (confirmed transmissions from
+/// the pane at x = 5 to a wall at x = 12), a point measured behind it is a
+/// mirror image; the wall they ended on is not refuted, and without the
+/// space seen through glass the test does not speak.
+#[test]
+fn space_seen_through_the_glass_makes_a_reflection() {
+    let planes = pane();
+    let mut through = room_space().empty_like();
+    for j in -10..=10 {
+        for k in -10..=10 {
+            let (y, z) = (0.2 + j as f64 * 0.03, 0.3 + k as f64 * 0.03);
+            let (start, end) = (Point3::new(5.0, y, z), Point3::new(12.0, y * 2.4, z * 2.4));
+            through.add_beam(&start, &end, 0.2, true);
+        }
+    }
+    let mut space = room_space();
+    space.with_through(through);
+    let weighing = only(&["seen-through"]);
+    // On the beams' way (x = 7.5), and on the wall they ended on.
+    let points = [[7.5f32, 0.36, 0.54], [12.0, 0.48, 0.72]];
+    let d = weighed_in(&points, 10.0, &planes, &weighing, None, &space);
+    assert_eq!(d.classes[0], Class::Reflection);
+    assert_eq!(d.rules[0], Rule::SeenThrough);
+    assert_ne!(d.classes[1], Class::Reflection);
+    let without = weighed_in(&points, 10.0, &planes, &weighing, None, &room_space());
+    assert_eq!(without.classes[0], Class::Unclassified);
+}
+

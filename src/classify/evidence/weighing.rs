@@ -56,6 +56,7 @@ impl Weighing {
                 "echo-strength" => Box::new(params.echo_strength),
                 "echo-order" => Box::new(params.echo_order),
                 "level-surface" => Box::new(params.level_surface),
+                "seen-through" => Box::new(params.seen_through),
                 other => {
                     return Err(Error::Config(format!(
                         "plane_map.weighing.tests: unknown evidence test {other:?} (known: {})",

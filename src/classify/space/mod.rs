@@ -82,6 +82,8 @@ pub struct SpaceMap {
     bricks: Vec<Box<Brick>>,
     /// The heights of the surfaces hit, for the floors and ceilings.
     levels: Levels,
+    /// The space seen through glass, when any beam was ([`SpaceMap::through`]).
+    through: Option<Box<SpaceMap>>,
 }
 
 impl std::fmt::Debug for SpaceMap {
@@ -123,6 +125,7 @@ impl SpaceMap {
             index: FxHashMap::default(),
             bricks: Vec::new(),
             levels: Levels::default(),
+            through: None,
         }
     }
 
@@ -209,6 +212,26 @@ impl SpaceMap {
             }
             brick.hits[local] = brick.hits[local].saturating_add(1);
         }
+    }
+
+    /// An empty map with this one's voxel and thresholds: for the space
+    /// seen through glass ([`with_through`](Self::with_through)).
+    pub fn empty_like(&self) -> Self {
+        Self::new(self.voxel, self.min_passes, self.block_hits)
+    }
+
+    /// Keep `through`, the space seen through glass (the beams of confirmed
+    /// transmissions behind their panes, from the pane to their echo), apart
+    /// from the space seen directly: its evidence is only as good as the
+    /// confirmation.
+    pub fn with_through(&mut self, through: SpaceMap) {
+        self.through = Some(Box::new(through));
+    }
+
+    /// The space seen through glass, when kept
+    /// ([`with_through`](Self::with_through)).
+    pub fn through(&self) -> Option<&SpaceMap> {
+        self.through.as_deref()
     }
 
     /// What direct observation says about the voxel holding `p`: occupied

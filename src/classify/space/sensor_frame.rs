@@ -33,6 +33,14 @@ impl SensorFrameSpace<'_> {
         self.map.occupancy_clear_of(&self.world(p), clearance)
     }
 
+    /// [`SpaceMap::occupancy_clear_of`] of a sensor-frame point in the
+    /// space seen through glass ([`SpaceMap::through`]); `None` where no
+    /// beam was.
+    pub fn through_occupancy_clear_of(&self, p: &Point3<f64>, clearance: f64) -> Option<Occupancy> {
+        let through = self.map.through()?;
+        Some(through.occupancy_clear_of(&self.world(p), clearance))
+    }
+
     /// The index of the floor or ceiling seen directly
     /// ([`Levels`](crate::classify::levels::Levels)) within `tolerance` of a
     /// sensor-frame point's height, if any.

@@ -15,6 +15,7 @@ use crate::classify::{
 use crate::cloud::Frame;
 use crate::map::{
     find_ghosts, glass_or_mirror, passed_through, BehindEchoes, Ghost, GhostParams, GlassOrMirror,
+    ThroughBeam,
 };
 use crate::pipeline::{Sequence, StageTimings};
 use crate::reflect::{BoundedPlane, Detection, EchoHistogram};
@@ -110,9 +111,17 @@ impl<'a> FrameViews<'a> {
         let (planes, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
+        let mut through = space.as_ref().map(SpaceMap::empty_like);
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.is_some()) {
             (Some(space), true) => self
-                .echo_splits(&space_frames, &planes, space, support.as_ref(), timings)?
+                .echo_splits(
+                    &space_frames,
+                    &planes,
+                    space,
+                    support.as_ref(),
+                    timings,
+                    through.as_mut(),
+                )?
                 .into_iter()
                 .zip(&planes)
                 .map(|((estimate, levels_behind), bp)| BoundedPlane {
@@ -131,6 +140,10 @@ impl<'a> FrameViews<'a> {
                 .collect(),
             _ => planes,
         };
+        let mut space = space;
+        if let (Some(space), Some(through)) = (space.as_mut(), through) {
+            space.with_through(through);
+        }
         Ok(Seen {
             support,
             space,
@@ -316,6 +329,7 @@ impl<'a> FrameViews<'a> {
         space: &SpaceMap,
         support: Option<&WorldSupport>,
         timings: &mut StageTimings,
+        mut through: Option<&mut SpaceMap>,
     ) -> Result<Vec<(GlassOrMirror, Vec<f64>)>> {
         let p = self.classifier.params();
         // The frames of a sequence share one intensity scale: the first
@@ -357,6 +371,9 @@ impl<'a> FrameViews<'a> {
             |(frame_counts, frame_direct)| {
                 for (total, frame) in totals.iter_mut().zip(&frame_counts) {
                     total.merge(frame);
+                    if let Some(map) = through.as_deref_mut() {
+                        carve_through(map, &frame.through, p.space_stop_ratio);
+                    }
                 }
                 direct.merge(&frame_direct);
             },
@@ -411,4 +428,17 @@ fn drop_ghosts(
         .map(|(_, p)| p)
         .collect();
     (planes, ghosts)
+}
+
+/// Carve a frame's confirmed transmissions (`beams`) into `map`, the space
+/// seen through glass: each from the pane to its echo, stopping short of it
+/// by `stop_ratio` of its range (at least two voxels), as the space seen
+/// directly does; its end a surface.
+fn carve_through(map: &mut SpaceMap, beams: &[ThroughBeam], stop_ratio: f64) {
+    let min_stop = 2.0 * map.voxel();
+    for b in beams {
+        let point = |v: [f32; 3]| Point3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]));
+        let stop = min_stop.max(stop_ratio * f64::from(b.range));
+        map.add_beam(&point(b.start), &point(b.end), stop, true);
+    }
 }
