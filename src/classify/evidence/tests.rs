@@ -438,4 +438,3 @@ fn space_seen_through_the_glass_makes_a_reflection() {
     let without = weighed_in(&points, 10.0, &planes, &weighing, None, &room_space());
     assert_eq!(without.classes[0], Class::Unclassified);
 }
-
