@@ -6,7 +6,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use super::seen_space::{CLEARANCE_RATIO, SUPPORT_RADIUS};
-use super::{BehindPoint, EvidenceTest, SeenSpace};
+use super::{rate_weight, BehindPoint, EvidenceTest, SeenSpace};
 use crate::classify::decide::SurfaceSupport;
 use crate::classify::rule::Rule;
 use crate::classify::space::{Occupancy, SensorFrameSpace};
@@ -46,9 +46,8 @@ impl ImageSupport {
     /// height, m), so that it decides landings as the landmark's
     /// chance-landing count does.
     pub fn test(self, seen_space: SeenSpace, level_tolerance: f64) -> ImageSupportTest {
-        let rate = |r: f64| r.clamp(1e-6, 1.0);
         ImageSupportTest {
-            weight: (rate(self.reflection_rate) / rate(self.chance_rate)).ln(),
+            weight: rate_weight(self.reflection_rate, self.chance_rate),
             seen_space,
             level_tolerance,
         }

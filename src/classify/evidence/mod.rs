@@ -79,5 +79,15 @@ pub fn outcome_weight(error: f64) -> f64 {
     ((1.0 - e) / e).ln()
 }
 
+/// The log-likelihood ratio of an observation seen at `reflection_rate`
+/// among the reflections behind a landmark and at `real_rate` among its
+/// real points: `ln(reflection_rate / real_rate)`, both rates kept within
+/// (1e-6, 1]. A test weighing it is a likelihood ratio proper
+/// ([`EvidenceTest::is_likelihood_ratio`]).
+pub fn rate_weight(reflection_rate: f64, real_rate: f64) -> f64 {
+    let rate = |r: f64| r.clamp(1e-6, 1.0);
+    (rate(reflection_rate) / rate(real_rate)).ln()
+}
+
 #[cfg(test)]
 mod tests;

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::seen_space::CLEARANCE_RATIO;
-use super::{BehindPoint, EvidenceTest};
+use super::{rate_weight, BehindPoint, EvidenceTest};
 use crate::classify::rule::Rule;
 use crate::classify::space::Occupancy;
 
@@ -34,16 +34,6 @@ impl Default for SeenThrough {
     }
 }
 
-impl SeenThrough {
-    /// `ln(reflection_rate / real_rate)`: a likelihood ratio, both rates
-    /// measured over every point behind a landmark, so it adds to the
-    /// landmark's share of reflections.
-    fn weight(&self) -> f64 {
-        let rate = |r: f64| r.clamp(1e-6, 1.0);
-        (rate(self.reflection_rate) / rate(self.real_rate)).ln()
-    }
-}
-
 impl EvidenceTest for SeenThrough {
     fn name(&self) -> &str {
         "seen-through"
@@ -61,6 +51,6 @@ impl EvidenceTest for SeenThrough {
         let space = point.space.filter(|_| point.single_pane)?;
         let clearance = CLEARANCE_RATIO * point.range;
         (space.through_occupancy_clear_of(&point.position, clearance)? == Occupancy::Free)
-            .then(|| self.weight())
+            .then(|| rate_weight(self.reflection_rate, self.real_rate))
     }
 }
