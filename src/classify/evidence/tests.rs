@@ -427,7 +427,7 @@ fn space_seen_through_the_glass_makes_a_reflection() {
         }
     }
     let mut space = room_space();
-    space.with_through(through);
+    space.set_through(through);
     let weighing = only(&["seen-through"]);
     // On the beams' way (x = 7.5), and on the wall they ended on.
     let points = [[7.5f32, 0.36, 0.54], [12.0, 0.48, 0.72]];

@@ -215,7 +215,7 @@ impl SpaceMap {
     }
 
     /// An empty map with this one's voxel and thresholds: for the space
-    /// seen through glass ([`with_through`](Self::with_through)).
+    /// seen through glass ([`set_through`](Self::set_through)).
     pub fn empty_like(&self) -> Self {
         Self::new(self.voxel, self.min_passes, self.block_hits)
     }
@@ -224,12 +224,12 @@ impl SpaceMap {
     /// transmissions behind their panes, from the pane to their echo), apart
     /// from the space seen directly: its evidence is only as good as the
     /// confirmation.
-    pub fn with_through(&mut self, through: SpaceMap) {
+    pub fn set_through(&mut self, through: SpaceMap) {
         self.through = Some(Box::new(through));
     }
 
     /// The space seen through glass, when kept
-    /// ([`with_through`](Self::with_through)).
+    /// ([`set_through`](Self::set_through)).
     pub fn through(&self) -> Option<&SpaceMap> {
         self.through.as_deref()
     }

@@ -34,8 +34,8 @@ impl SensorFrameSpace<'_> {
     }
 
     /// [`SpaceMap::occupancy_clear_of`] of a sensor-frame point in the
-    /// space seen through glass ([`SpaceMap::through`]); `None` where no
-    /// beam was.
+    /// space seen through glass ([`SpaceMap::through`]); `None` where the
+    /// map keeps none.
     pub fn through_occupancy_clear_of(&self, p: &Point3<f64>, clearance: f64) -> Option<Occupancy> {
         let through = self.map.through()?;
         Some(through.occupancy_clear_of(&self.world(p), clearance))

@@ -142,7 +142,7 @@ impl<'a> FrameViews<'a> {
         };
         let mut space = space;
         if let (Some(space), Some(through)) = (space.as_mut(), through) {
-            space.with_through(through);
+            space.set_through(through);
         }
         Ok(Seen {
             support,
