@@ -6,8 +6,6 @@
 //! sums these over the keyframes; the tests they rest on are the
 //! classifier's, so they live here.
 
-use std::cell::OnceCell;
-
 use nalgebra::Point3;
 
 use super::boundary::BeamPlanes;
@@ -18,8 +16,7 @@ use super::plane_map::{PlaneMapClassifier, PlaneMapParams};
 use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
 use super::FrameInput;
-use crate::map::glass_or_mirror::ThroughBeam;
-use crate::map::glass_or_mirror::IMAGE_NULL_SHIFTS;
+use crate::map::glass_or_mirror::{ThroughBeam, IMAGE_NULL_SHIFTS};
 use crate::map::BehindEchoes;
 use crate::reflect::echo_split::echo_strength;
 use crate::reflect::{BoundedPlane, EchoHistogram, EchoSplitParams};
@@ -179,17 +176,15 @@ impl EchoCounting<'_> {
         stats: &mut BehindEchoes,
     ) {
         let range = pos.coords.norm();
-        let landing = ImageLanding {
-            space: view.space,
-            seen: view.seen,
-            position: pos,
-            seen_at_position: OnceCell::new(),
-            seen_space: &self.params.weighing.seen_space,
-            level_tolerance: self.params.weighing.level_surface.tolerance,
-            plane: &view.planes[h.plane].plane,
-            crossing: Point3::from(pos.coords * (h.range / range)),
-            range,
-        };
+        let landing = ImageLanding::new(
+            view.space,
+            view.seen,
+            &view.planes[h.plane].plane,
+            pos,
+            Point3::from(pos.coords * (h.range / range)),
+            &self.params.weighing.seen_space,
+            self.params.weighing.level_surface.tolerance,
+        );
         // Every echo's image moved off the mirror position: how often such
         // images land on a seen surface by chance. Counted over every echo
         // inside, whatever the seen space makes of its own image, as the

@@ -211,14 +211,12 @@ impl SupportBuilder {
             .collect();
         cubes.sort_unstable();
         let mut columns = FxHashMap::default();
-        let mut column_cubes = Vec::with_capacity(cubes.len());
-        for (k, (column, z, b)) in cubes.iter().enumerate() {
-            if k == 0 || cubes[k - 1].0 != *column {
-                columns.insert(*column, (k as u32, 0));
-            }
-            columns.get_mut(column).expect("inserted above").1 += 1;
-            column_cubes.push((*z as i32, *b));
+        let mut start = 0u32;
+        for column in cubes.chunk_by(|a, b| a.0 == b.0) {
+            columns.insert(column[0].0, (start, column.len() as u32));
+            start += column.len() as u32;
         }
+        let column_cubes = cubes.iter().map(|&(_, z, b)| (z as i32, b)).collect();
         WorldSupport {
             radius: self.radius,
             columns,

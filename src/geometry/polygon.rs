@@ -240,18 +240,11 @@ impl ConvexPolygon {
         if self.is_empty() {
             return f64::INFINITY;
         }
-        // Largest signed distance to an edge line: ≤ 0 exactly when inside,
-        // and then its magnitude is the distance to the boundary.
-        let max_line = self
-            .edges()
-            .filter_map(|(a, b)| outward_normal(a, b).map(|n| n.dot(&(p - a))))
-            .fold(f64::NEG_INFINITY, f64::max);
+        let max_line = self.max_edge_line(p);
         if max_line <= 0.0 {
             max_line
         } else {
-            self.edges()
-                .map(|(a, b)| segment_distance(p, a, b))
-                .fold(f64::INFINITY, f64::min)
+            self.boundary_distance(p)
         }
     }
 
@@ -263,17 +256,28 @@ impl ConvexPolygon {
         if self.is_empty() {
             return f64::INFINITY <= margin;
         }
-        let max_line = self
-            .edges()
-            .filter_map(|(a, b)| outward_normal(a, b).map(|n| n.dot(&(p - a))))
-            .fold(f64::NEG_INFINITY, f64::max);
+        let max_line = self.max_edge_line(p);
         if max_line <= 0.0 || max_line > margin {
             return max_line <= margin;
         }
+        self.boundary_distance(p) <= margin
+    }
+
+    /// The largest signed distance from `p` to an edge's line (outward
+    /// positive): at most 0 exactly when `p` is inside, and then its
+    /// magnitude is the distance to the boundary; outside, a lower bound of
+    /// it.
+    fn max_edge_line(&self, p: &Point2<f64>) -> f64 {
+        self.edges()
+            .filter_map(|(a, b)| outward_normal(a, b).map(|n| n.dot(&(p - a))))
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The distance from `p` to the nearest edge segment.
+    fn boundary_distance(&self, p: &Point2<f64>) -> f64 {
         self.edges()
             .map(|(a, b)| segment_distance(p, a, b))
             .fold(f64::INFINITY, f64::min)
-            <= margin
     }
 
     /// The intersection of two convex polygons (possibly empty).

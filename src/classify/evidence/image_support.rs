@@ -80,17 +80,15 @@ impl EvidenceTest for ImageSupportTest {
         let space = point
             .space
             .filter(|_| point.single_pane && !point.past_extent)?;
-        let landing = ImageLanding {
+        let landing = ImageLanding::new(
             space,
-            seen: point.support,
-            position: point.position,
-            seen_at_position: OnceCell::new(),
-            seen_space: &self.seen_space,
-            level_tolerance: self.level_tolerance,
-            plane: &point.landmark.plane,
-            crossing: point.crossing_point(),
-            range: point.range,
-        };
+            point.support,
+            &point.landmark.plane,
+            point.position,
+            point.crossing_point(),
+            &self.seen_space,
+            self.level_tolerance,
+        );
         let specific = landing.lands(&point.mirrored)
             && IMAGE_NULL_SHIFTS
                 .iter()
@@ -128,7 +126,31 @@ pub(crate) struct ImageLanding<'a> {
     pub range: f64,
 }
 
-impl ImageLanding<'_> {
+impl<'a> ImageLanding<'a> {
+    /// The landings of the point measured at `position` behind `plane`,
+    /// its beam crossing the plane at `crossing`.
+    pub fn new(
+        space: &'a SensorFrameSpace<'a>,
+        seen: Option<&'a dyn SurfaceSupport>,
+        plane: &'a Plane,
+        position: Point3<f64>,
+        crossing: Point3<f64>,
+        seen_space: &'a SeenSpace,
+        level_tolerance: f64,
+    ) -> Self {
+        Self {
+            space,
+            seen,
+            position,
+            seen_at_position: OnceCell::new(),
+            seen_space,
+            level_tolerance,
+            plane,
+            crossing,
+            range: position.coords.norm(),
+        }
+    }
+
     /// Whether the seen space refutes "the echo came from `end`".
     pub fn refuted(&self, end: &Point3<f64>) -> bool {
         self.seen_space.refuted(

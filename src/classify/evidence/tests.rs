@@ -381,18 +381,15 @@ fn a_landing_is_refuted_only_by_its_end_seen_free() {
     let (mut landed, mut refuted) = (0, 0);
     for (px, py) in [(13.0, 0.2), (9.0, -1.0), (7.0, 1.5)] {
         let position = Point3::new(px, py, 0.3);
-        let range = position.coords.norm();
-        let landing = ImageLanding {
-            space: &view,
-            seen: Some(&far),
+        let landing = ImageLanding::new(
+            &view,
+            Some(&far),
+            &planes[0].plane,
             position,
-            seen_at_position: std::cell::OnceCell::new(),
-            seen_space: &seen_space,
-            level_tolerance: 0.1,
-            plane: &planes[0].plane,
-            crossing: Point3::from(position.coords * (5.0 / px)),
-            range,
-        };
+            Point3::from(position.coords * (5.0 / px)),
+            &seen_space,
+            0.1,
+        );
         for i in 0..=40 {
             for j in -8..=8 {
                 let image = Point3::new(-5.0 + i as f64 * 0.25, j as f64 * 0.25, 0.3);

@@ -111,7 +111,11 @@ impl<'a> FrameViews<'a> {
         let (planes, ghosts) = drop_ghosts(planes, &path, ghosts, support.as_ref());
         let crossings_open = crossing_radius > 0.0;
         // The landmarks as classified: with their echo splits, when learned.
-        let mut through = space.as_ref().map(SpaceMap::empty_like);
+        // The space seen through glass, carved by the echo split's pass.
+        let mut through = space
+            .as_ref()
+            .filter(|_| p.echo_split.is_some())
+            .map(SpaceMap::empty_like);
         let planes: Vec<BoundedPlane> = match (&space, p.echo_split.is_some()) {
             (Some(space), true) => self
                 .echo_splits(
