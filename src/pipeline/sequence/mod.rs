@@ -22,8 +22,7 @@
 
 use std::borrow::Cow;
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use nalgebra::Isometry3;
@@ -35,6 +34,10 @@ use crate::cloud::{Frame, SetAside};
 use crate::io::{self, Dataset, FrameEntry, InMemory, PlyDir};
 use crate::sensor::{OrganizedScan, SensorModel};
 use crate::Result;
+
+mod frame_cache;
+
+use frame_cache::{megabytes, FrameCache};
 
 /// Frames of one sequence in timestamp order, with their poses when given.
 #[derive(Clone)]
@@ -105,71 +108,11 @@ impl Default for InputParams {
     }
 }
 
-/// Frames kept after their first read, up to a budget of bytes: the first
-/// frames of a sequence (passes read in order), so a short sequence is
-/// parsed once and a long one costs no more memory than the budget.
-/// The organized scans of the kept frames are kept too (same budget):
-/// every pass pairs the returns of the frames it reads.
-#[derive(Debug)]
-struct FrameCache {
-    frames: Vec<OnceLock<Frame>>,
-    scans: Vec<OnceLock<OrganizedScan>>,
-    /// Per frame, whether its points carry times (asked at every pass,
-    /// answered once: an untimed frame is a scan of all its points).
-    timed: Vec<OnceLock<bool>>,
-    budget: usize,
-    used: AtomicUsize,
-}
-
-impl FrameCache {
-    fn new(frames: usize, budget: usize) -> Self {
-        Self {
-            frames: (0..frames).map(|_| OnceLock::new()).collect(),
-            scans: (0..frames).map(|_| OnceLock::new()).collect(),
-            timed: (0..frames).map(|_| OnceLock::new()).collect(),
-            budget,
-            used: AtomicUsize::new(0),
-        }
-    }
-
-    /// Keep `value` in `cell` if its `bytes` fit the budget; gives it back
-    /// otherwise.
-    fn keep<'a, T>(
-        &self,
-        cell: &'a OnceLock<T>,
-        value: T,
-        bytes: usize,
-    ) -> std::result::Result<&'a T, T> {
-        let before = self.used.fetch_add(bytes, Ordering::Relaxed);
-        if before + bytes > self.budget {
-            self.used.fetch_sub(bytes, Ordering::Relaxed);
-            return Err(value);
-        }
-        match cell.set(value) {
-            Ok(()) => Ok(cell.get().expect("just set")),
-            // Made twice at once: keep the first, count it once.
-            Err(value) => {
-                self.used.fetch_sub(bytes, Ordering::Relaxed);
-                Err(value)
-            }
-        }
-    }
-}
-
 /// Frames handled at once by [`Sequence::stream`]: enough to keep every
 /// thread busy, few enough that the frames in flight stay a small,
 /// fixed amount of memory.
 pub fn stream_window() -> usize {
     (4 * rayon::current_num_threads()).max(8)
-}
-
-/// Megabytes as bytes (negative and NaN as 0).
-fn megabytes(mb: f64) -> usize {
-    if mb > 0.0 {
-        (mb * 1e6) as usize
-    } else {
-        0
-    }
 }
 
 impl Sequence {
