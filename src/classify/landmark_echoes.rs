@@ -17,7 +17,7 @@ use super::space::{Occupancy, SensorFrameSpace, SpaceMap};
 use super::support::WorldSupport;
 use super::FrameInput;
 use crate::map::glass_or_mirror::{ThroughBeam, IMAGE_NULL_SHIFTS};
-use crate::map::BehindEchoes;
+use crate::map::{BehindEchoes, LandedEcho};
 use crate::reflect::echo_split::echo_strength;
 use crate::reflect::{BoundedPlane, EchoHistogram, EchoSplitParams};
 
@@ -149,6 +149,13 @@ impl EchoCounting<'_> {
             .crosses_between(&pos, h.plane, range - glass, range + glass);
         if on_other_pane {
             return;
+        }
+        if !near_edge {
+            let w = view.input.pose * pos;
+            stats.landed.push(LandedEcho {
+                position: [w.x as f32, w.y as f32, w.z as f32],
+                strength: strength as f32,
+            });
         }
         let anchor = view
             .space

@@ -84,6 +84,21 @@ pub struct BehindEchoes {
     /// through glass frame by frame, not summed ([`BehindEchoes::merge`]
     /// leaves them).
     pub through: Vec<ThroughBeam>,
+    /// One frame's echoes inside, where they landed (world frame) and how
+    /// strong they were: once the landmark's split is known, the ones on
+    /// its transmitted side are surfaces seen through the glass. Per frame,
+    /// like `through`.
+    pub landed: Vec<LandedEcho>,
+}
+
+/// An echo behind a landmark: where it landed (world frame) and its
+/// strength (`log10(I r^k / cos)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandedEcho {
+    /// Where it was measured, world frame.
+    pub position: [f32; 3],
+    /// Its echo strength, decades.
+    pub strength: f32,
 }
 
 /// A confirmed transmission's beam behind its pane, world frame: from where

@@ -15,6 +15,7 @@ pub mod merge;
 pub mod panes;
 pub mod params;
 pub mod reflection_share;
+pub mod through_surfaces;
 
 pub use evidence::{
     gather_evidence, open_where_crossed, passed_through, path_crossings, EvidenceFrame,
@@ -22,9 +23,10 @@ pub use evidence::{
 };
 pub use ghosts::{find_ghosts, Ghost, GhostParams};
 pub use glass_or_mirror::{
-    glass_or_mirror, BehindEchoes, GlassOrMirror, MirrorParams, ThroughBeam,
+    glass_or_mirror, BehindEchoes, GlassOrMirror, LandedEcho, MirrorParams, ThroughBeam,
 };
 pub use landmark::{Landmark, LandmarkSelection, PlaneMap, PlaneObservation};
 pub use merge::{MapMerger, MergeParams, WeightedAverageMerger};
 pub use panes::{find_panes, Pane, PaneParams};
 pub use params::{BoundaryMode, MapParams, MergerName};
+pub use through_surfaces::LandedStrengths;

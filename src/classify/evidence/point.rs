@@ -60,6 +60,20 @@ impl BehindPoint<'_> {
         Point3::from(self.position.coords * (self.crossing / self.range))
     }
 
+    /// Whether it was measured in a voxel where a surface was seen through
+    /// its landmark (the space seen through glass: confirmed transmissions,
+    /// and voxels where most echoes behind the landmark were on the
+    /// transmitted side of its split): 3DRef labels it an Obstacle whatever
+    /// path its echo took, so the path's evidence (its echo strength) does
+    /// not decide its label. False past a second pane or without that map.
+    pub fn on_surface_seen_through(&self) -> bool {
+        self.single_pane
+            && self
+                .space
+                .and_then(|s| s.through_surface_at(&self.position))
+                .unwrap_or(false)
+    }
+
     /// The echo's intensity.
     pub fn intensity(&self) -> f32 {
         self.frame.points[self.index].intensity

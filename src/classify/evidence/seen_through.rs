@@ -1,5 +1,6 @@
-//! Where the point was measured, beams seen through the same glass passed:
-//! nothing real is there, so it is a mirror image.
+//! Where the point was measured, beams seen through the same glass passed
+//! (nothing real is there, so it is a mirror image), or a surface was seen
+//! through it (3DRef labels whatever lands there real).
 
 use serde::{Deserialize, Serialize};
 
@@ -15,6 +16,11 @@ use crate::classify::space::Occupancy;
 /// ceiling reflected in a window with the street behind it is the case:
 /// the transmitted beams to the buildings across the street cross where
 /// the ceiling's image lies, and no other test speaks for it.
+///
+/// Where a surface was seen through the glass in the voxel of the measured
+/// position ([`BehindPoint::on_surface_seen_through`]), the point is
+/// labelled real whatever its path: a floor that runs on behind a glass
+/// partition is its own mirror image, and its reflection lands on it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SeenThrough {
@@ -25,6 +31,12 @@ pub struct SeenThrough {
     /// they crossed: a confirmed transmission that was a reflection, plane
     /// and pose errors moving a beam across a real surface (probability).
     pub real_rate: f64,
+    /// Share of the reflections behind a landmark measured on a surface
+    /// seen through it (probability).
+    pub surface_reflection_rate: f64,
+    /// Share of the real points behind a landmark measured on a surface
+    /// seen through it (probability).
+    pub surface_real_rate: f64,
 }
 
 /// The values of `configs/default.toml`.
@@ -50,7 +62,13 @@ impl EvidenceTest for SeenThrough {
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let space = point.space.filter(|_| point.single_pane)?;
         let clearance = CLEARANCE_RATIO * point.range;
-        (space.through_occupancy_clear_of(&point.position, clearance)? == Occupancy::Free)
-            .then(|| rate_weight(self.reflection_rate, self.real_rate))
+        match space.through_occupancy_clear_of(&point.position, clearance)? {
+            Occupancy::Free => Some(rate_weight(self.reflection_rate, self.real_rate)),
+            _ if point.on_surface_seen_through() => Some(rate_weight(
+                self.surface_reflection_rate,
+                self.surface_real_rate,
+            )),
+            _ => None,
+        }
     }
 }

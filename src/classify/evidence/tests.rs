@@ -410,8 +410,8 @@ fn a_landing_is_refuted_only_by_its_end_seen_free() {
 
 /// Where beams seen through the pane passed (confirmed transmissions from
 /// the pane at x = 5 to a wall at x = 12), a point measured behind it is a
-/// mirror image; the wall they ended on is not refuted, and without the
-/// space seen through glass the test does not speak.
+/// mirror image; one measured on the wall they ended on is real, and
+/// without the space seen through glass the test does not speak.
 #[test]
 fn space_seen_through_the_glass_makes_a_reflection() {
     let planes = pane();
@@ -431,7 +431,33 @@ fn space_seen_through_the_glass_makes_a_reflection() {
     let d = weighed_in(&points, 10.0, &planes, &weighing, None, &space);
     assert_eq!(d.classes[0], Class::Reflection);
     assert_eq!(d.rules[0], Rule::SeenThrough);
-    assert_ne!(d.classes[1], Class::Reflection);
+    assert_eq!(d.classes[1], Class::Obstacle);
+    assert_eq!(d.rules[1], Rule::SeenThrough);
     let without = weighed_in(&points, 10.0, &planes, &weighing, None, &room_space());
-    assert_eq!(without.classes[0], Class::Unclassified);
+    assert_eq!(without.classes, [Class::Unclassified; 2]);
+}
+
+/// A weak echo behind the pane is a reflection by its strength, but on a
+/// surface seen through the glass it is labelled real whatever its path
+/// (3DRef): there the echo strength does not speak, and the surface makes
+/// it an Obstacle.
+#[test]
+fn on_a_surface_seen_through_the_glass_the_echo_strength_is_silent() {
+    let mut planes = pane();
+    planes[0].echo_split = Some(split());
+    let point = [[8.0f32, 0.2, 0.3]];
+    let strength = only(&["echo-strength"]);
+    let weak = weighed_at(&point, 1.0, &planes, &strength);
+    assert_eq!(weak.classes, [Class::Reflection]);
+    let mut through = room_space().empty_like();
+    let at = Point3::new(8.0, 0.2, 0.3);
+    through.add_beam(&at, &at, 0.0, true);
+    let mut space = room_space();
+    space.set_through(through);
+    let silent = weighed_in(&point, 1.0, &planes, &strength, None, &space);
+    assert_eq!(silent.classes, [Class::Unclassified]);
+    let both = only(&["echo-strength", "seen-through"]);
+    let d = weighed_in(&point, 1.0, &planes, &both, None, &space);
+    assert_eq!(d.classes, [Class::Obstacle]);
+    assert_eq!(d.rules, [Rule::SeenThrough]);
 }

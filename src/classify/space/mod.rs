@@ -261,6 +261,13 @@ impl SpaceMap {
         Occupancy::Free
     }
 
+    /// Whether a surface was seen in the voxel holding `p` (3DRef labels a
+    /// point within 0.15 m of a surface as on it; a neighbour voxel would
+    /// reach 0.2-0.35 m).
+    pub fn surface_at(&self, p: &Point3<f64>) -> bool {
+        self.counts(self.voxel_of(p)).0 > 0
+    }
+
     /// Whether a voxel within `k` voxels of `v` (each axis) holds a seen
     /// surface.
     fn hit_within(&self, v: [i64; 3], k: i64) -> bool {

@@ -33,6 +33,12 @@ impl SensorFrameSpace<'_> {
         self.map.occupancy_clear_of(&self.world(p), clearance)
     }
 
+    /// Whether a surface was seen through glass ([`SpaceMap::through`]) in
+    /// the voxel of a sensor-frame point; `None` where the map keeps none.
+    pub fn through_surface_at(&self, p: &Point3<f64>) -> Option<bool> {
+        Some(self.map.through()?.surface_at(&self.world(p)))
+    }
+
     /// [`SpaceMap::occupancy_clear_of`] of a sensor-frame point in the
     /// space seen through glass ([`SpaceMap::through`]); `None` where the
     /// map keeps none.

@@ -15,7 +15,7 @@ use crate::classify::{
 use crate::cloud::Frame;
 use crate::map::{
     find_ghosts, glass_or_mirror, passed_through, BehindEchoes, Ghost, GhostParams, GlassOrMirror,
-    ThroughBeam,
+    LandedStrengths, ThroughBeam,
 };
 use crate::pipeline::{Sequence, StageTimings};
 use crate::reflect::{BoundedPlane, Detection, EchoHistogram};
@@ -359,6 +359,10 @@ impl<'a> FrameViews<'a> {
         // The strengths of the direct echoes (no pane on the beam), what a
         // mirror's images look like.
         let mut direct = EchoHistogram::default();
+        // Per landmark: its strongest echoes by voxel, for the surfaces seen
+        // through it once its split is known.
+        let mut landed = vec![LandedStrengths::default(); planes.len()];
+        let voxel = space.voxel();
         let counting = EchoCounting {
             params: p,
             split: &split,
@@ -373,10 +377,15 @@ impl<'a> FrameViews<'a> {
             timings,
             |inp, hits| counting.count_frame(inp, hits),
             |(frame_counts, frame_direct)| {
-                for (total, frame) in totals.iter_mut().zip(&frame_counts) {
+                for ((total, strengths), frame) in
+                    totals.iter_mut().zip(&mut landed).zip(&frame_counts)
+                {
                     total.merge(frame);
                     if let Some(map) = through.as_deref_mut() {
                         carve_through(map, &frame.through, p.space_stop_ratio);
+                        for echo in &frame.landed {
+                            strengths.add(echo, voxel);
+                        }
                     }
                 }
                 direct.merge(&frame_direct);
@@ -384,9 +393,15 @@ impl<'a> FrameViews<'a> {
         )?;
         Ok(totals
             .into_iter()
+            .zip(&landed)
             .enumerate()
-            .map(|(j, t)| {
+            .map(|(j, (t, strengths))| {
                 let estimate = glass_or_mirror(&t, &direct, &split, &p.mirror, exponent);
+                if let (Some(map), Some(split)) = (through.as_deref_mut(), &estimate.echo_split) {
+                    for surface in strengths.surfaces(split, voxel).into_iter().flatten() {
+                        map.add_beam(&surface, &surface, 0.0, true);
+                    }
+                }
                 tracing::debug!(
                     plane = j,
                     behind_median = t.all.quantile(0.5),
