@@ -36,6 +36,10 @@ impl EvidenceTest for EchoOrder {
         Rule::DualReturn
     }
 
+    fn tells_the_path(&self) -> bool {
+        true
+    }
+
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let other = point.scan.partner(point.index)?;
         let other_range = point.frame.points[other].range();

@@ -67,13 +67,12 @@ impl EvidenceTest for EchoStrength {
         Rule::EchoStrength
     }
 
+    fn tells_the_path(&self) -> bool {
+        true
+    }
+
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
         let split = point.landmark.echo_split?;
-        // A reflection that lands on a surface behind the glass is labelled
-        // real (3DRef): there the path the strength tells says nothing.
-        if point.on_surface_seen_through() {
-            return None;
-        }
         let level = || {
             point
                 .space

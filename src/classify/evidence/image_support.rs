@@ -72,6 +72,10 @@ impl EvidenceTest for ImageSupportTest {
         Rule::Support
     }
 
+    fn tells_the_path(&self) -> bool {
+        true
+    }
+
     fn is_likelihood_ratio(&self) -> bool {
         true
     }

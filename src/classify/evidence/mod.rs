@@ -67,6 +67,16 @@ pub trait EvidenceTest: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// Whether the test tells the echo's path (reflected or transmitted),
+    /// not whether a surface stands where it was measured. 3DRef labels a
+    /// point by the latter: a reflection that lands on a surface behind the
+    /// glass is an Obstacle. On a surface seen through the glass
+    /// ([`BehindPoint::on_surface_seen_through`]) such a test is not
+    /// weighed.
+    fn tells_the_path(&self) -> bool {
+        false
+    }
+
     /// The log-likelihood ratio of this test's observation of `point`.
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64>;
 }
