@@ -73,6 +73,13 @@ pub fn decide_weighed(
         let position = ctx.frame.points[i].position();
         let range = position.coords.norm();
         let crossing = beam_crossing(&landmark.plane, &position).unwrap_or(range);
+        let single_pane = !one_sided.second_pane(
+            &position,
+            plane,
+            crossing,
+            params.glass_distance,
+            params.behind_distance,
+        );
         let point = BehindPoint {
             index: i,
             position,
@@ -80,13 +87,12 @@ pub fn decide_weighed(
             landmark,
             crossing,
             mirrored: landmark.plane.mirror(&position),
-            single_pane: !one_sided.second_pane(
-                &position,
-                plane,
-                crossing,
-                params.glass_distance,
-                params.behind_distance,
-            ),
+            single_pane,
+            on_surface_seen_through: single_pane
+                && ctx
+                    .space
+                    .and_then(|s| s.through_surface_at(&position))
+                    .unwrap_or(false),
             past_extent,
             room_depth: room[plane],
             frame: ctx.frame,

@@ -71,7 +71,7 @@ pub trait EvidenceTest: Send + Sync + std::fmt::Debug {
     /// not whether a surface stands where it was measured. 3DRef labels a
     /// point by the latter: a reflection that lands on a surface behind the
     /// glass is an Obstacle. On a surface seen through the glass
-    /// ([`BehindPoint::on_surface_seen_through`]) such a test is not
+    /// ([`BehindPoint::on_surface_seen_through`](BehindPoint)) such a test is not
     /// weighed.
     fn tells_the_path(&self) -> bool {
         false

@@ -45,6 +45,12 @@ pub struct BehindPoint<'a> {
     pub sensor: &'a SensorModel,
     /// The space seen directly over the sequence, from this frame's pose.
     pub space: Option<&'a SensorFrameSpace<'a>>,
+    /// Whether it was measured in a voxel where a surface was seen through
+    /// its landmark (the space seen through glass: confirmed transmissions'
+    /// ends, and voxels where most echoes behind the landmark were on the
+    /// transmitted side of its split): 3DRef labels it an Obstacle whatever
+    /// path its echo took. False past a second pane or without that map.
+    pub on_surface_seen_through: bool,
     /// Surfaces observed over the sequence (or in the frame).
     pub support: Option<&'a dyn SurfaceSupport>,
 }
@@ -58,20 +64,6 @@ impl BehindPoint<'_> {
     /// Where its beam crossed the landmark (sensor frame).
     pub fn crossing_point(&self) -> Point3<f64> {
         Point3::from(self.position.coords * (self.crossing / self.range))
-    }
-
-    /// Whether it was measured in a voxel where a surface was seen through
-    /// its landmark (the space seen through glass: confirmed transmissions,
-    /// and voxels where most echoes behind the landmark were on the
-    /// transmitted side of its split): 3DRef labels it an Obstacle whatever
-    /// path its echo took, so the path's evidence (its echo strength) does
-    /// not decide its label. False past a second pane or without that map.
-    pub fn on_surface_seen_through(&self) -> bool {
-        self.single_pane
-            && self
-                .space
-                .and_then(|s| s.through_surface_at(&self.position))
-                .unwrap_or(false)
     }
 
     /// The echo's intensity.

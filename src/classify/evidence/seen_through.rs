@@ -18,7 +18,7 @@ use crate::classify::space::Occupancy;
 /// the ceiling's image lies, and no other test speaks for it.
 ///
 /// Where a surface was seen through the glass in the voxel of the measured
-/// position ([`BehindPoint::on_surface_seen_through`]), the point is
+/// position ([`BehindPoint::on_surface_seen_through`](super::BehindPoint)), the point is
 /// labelled real whatever its path: a floor that runs on behind a glass
 /// partition is its own mirror image, and its reflection lands on it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -60,15 +60,15 @@ impl EvidenceTest for SeenThrough {
     }
 
     fn weigh(&self, point: &BehindPoint<'_>) -> Option<f64> {
-        let space = point.space.filter(|_| point.single_pane)?;
-        let clearance = CLEARANCE_RATIO * point.range;
-        match space.through_occupancy_clear_of(&point.position, clearance)? {
-            Occupancy::Free => Some(rate_weight(self.reflection_rate, self.real_rate)),
-            _ if point.on_surface_seen_through() => Some(rate_weight(
+        if point.on_surface_seen_through {
+            return Some(rate_weight(
                 self.surface_reflection_rate,
                 self.surface_real_rate,
-            )),
-            _ => None,
+            ));
         }
+        let space = point.space.filter(|_| point.single_pane)?;
+        let clearance = CLEARANCE_RATIO * point.range;
+        (space.through_occupancy_clear_of(&point.position, clearance)? == Occupancy::Free)
+            .then(|| rate_weight(self.reflection_rate, self.real_rate))
     }
 }

@@ -132,7 +132,7 @@ impl Weighing {
         let mut evidence = 0.0;
         let mut weighed = false;
         let (mut best_for, mut best_against) = ((0.0, Rule::Undecided), (0.0, Rule::Undecided));
-        let on_surface = self.tests.iter().any(|t| t.tells_the_path()) && point.on_surface_seen_through();
+        let on_surface = point.on_surface_seen_through;
         for test in &self.tests {
             if on_surface && test.tells_the_path() {
                 continue;
