@@ -88,7 +88,10 @@ pub fn decide_weighed(
             crossing,
             mirrored: landmark.plane.mirror(&position),
             single_pane,
+            // Nothing is seen through a mirror: behind one, strong echoes
+            // are bright reflections, no surface.
             on_surface_seen_through: single_pane
+                && !landmark.is_mirror()
                 && ctx
                     .space
                     .and_then(|s| s.through_surface_at(&position))

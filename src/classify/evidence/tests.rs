@@ -440,7 +440,7 @@ fn space_seen_through_the_glass_makes_a_reflection() {
 /// A weak echo behind the pane is a reflection by its strength, but on a
 /// surface seen through the glass it is labelled real whatever its path
 /// (3DRef): there the echo strength does not speak, and the surface makes
-/// it an Obstacle.
+/// it an Obstacle; behind a mirror it does not.
 #[test]
 fn on_a_surface_seen_through_the_glass_the_echo_strength_is_silent() {
     let mut planes = pane();
@@ -460,4 +460,9 @@ fn on_a_surface_seen_through_the_glass_the_echo_strength_is_silent() {
     let d = weighed_in(&point, 1.0, &planes, &both, None, &space);
     assert_eq!(d.classes, [Class::Obstacle]);
     assert_eq!(d.rules, [Rule::SeenThrough]);
+    // Nothing is seen through a mirror: behind one the surface says
+    // nothing, and the point is its reflection.
+    planes[0].mirror_probability = Some(0.9);
+    let mirror = weighed_in(&point, 1.0, &planes, &both, None, &space);
+    assert_eq!(mirror.classes, [Class::Reflection]);
 }

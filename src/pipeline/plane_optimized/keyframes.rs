@@ -397,7 +397,12 @@ impl<'a> FrameViews<'a> {
             .enumerate()
             .map(|(j, (t, strengths))| {
                 let estimate = glass_or_mirror(&t, &direct, &split, &p.mirror, exponent);
-                if let (Some(map), Some(split)) = (through.as_deref_mut(), &estimate.echo_split) {
+                // Nothing is seen through a mirror: its strong echoes are
+                // bright reflections.
+                let glass = estimate.mirror_probability <= 0.5;
+                if let (Some(map), Some(split), true) =
+                    (through.as_deref_mut(), &estimate.echo_split, glass)
+                {
                     for surface in strengths.surfaces(split, voxel).into_iter().flatten() {
                         map.add_beam(&surface, &surface, 0.0, true);
                     }
