@@ -22,7 +22,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::reflection_share::StrengthMixture;
-use crate::reflect::{EchoHistogram, EchoSplit, EchoSplitParams};
+use crate::reflect::{more_likely_mirror, EchoHistogram, EchoSplit, EchoSplitParams};
 
 /// Parameters of the glass-or-mirror estimate (`[plane_map.mirror]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -182,6 +182,14 @@ pub struct GlassOrMirror {
     /// The share of reflections among the echoes the seen space decides
     /// ([`decided_share`]).
     pub decided_share: Option<f64>,
+}
+
+impl GlassOrMirror {
+    /// Whether the landmark is more likely a mirror than glass
+    /// ([`more_likely_mirror`], as [`BoundedPlane::is_mirror`](crate::reflect::BoundedPlane::is_mirror)).
+    pub fn is_mirror(&self) -> bool {
+        more_likely_mirror(self.mirror_probability)
+    }
 }
 
 /// The estimate for a landmark with echoes `behind`, given the strengths of

@@ -24,6 +24,13 @@ use crate::geometry::grid::{EvidenceGrid, Surface};
 use crate::geometry::{ConvexPolygon, Plane, PlaneChart};
 use crate::sensor::OrganizedScan;
 
+/// Whether a landmark with this probability of being a mirror is more
+/// likely a mirror than glass: then nothing behind it is real, and its
+/// strong echoes are bright images, not transmissions.
+pub fn more_likely_mirror(mirror_probability: f64) -> bool {
+    mirror_probability > 0.5
+}
+
 /// A plane with a convex boundary in its chart, in some frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoundedPlane {
@@ -66,7 +73,7 @@ pub struct BoundedPlane {
 impl BoundedPlane {
     /// Whether the plane is more likely a mirror than glass.
     pub fn is_mirror(&self) -> bool {
-        self.mirror_probability.is_some_and(|p| p > 0.5)
+        self.mirror_probability.is_some_and(more_likely_mirror)
     }
 
     /// Bound `plane` by the hull of `points` projected into its chart.

@@ -359,8 +359,8 @@ impl<'a> FrameViews<'a> {
         // The strengths of the direct echoes (no pane on the beam), what a
         // mirror's images look like.
         let mut direct = EchoHistogram::default();
-        // Per landmark: its strongest echoes by voxel, for the surfaces seen
-        // through it once its split is known.
+        // Per landmark: the strengths of its echoes by voxel, for the
+        // surfaces seen through it once its split is known.
         let mut landed = vec![LandedStrengths::default(); planes.len()];
         let voxel = space.voxel();
         let counting = EchoCounting {
@@ -399,10 +399,11 @@ impl<'a> FrameViews<'a> {
                 let estimate = glass_or_mirror(&t, &direct, &split, &p.mirror, exponent);
                 // Nothing is seen through a mirror: its strong echoes are
                 // bright reflections.
-                let glass = estimate.mirror_probability <= 0.5;
-                if let (Some(map), Some(split), true) =
-                    (through.as_deref_mut(), &estimate.echo_split, glass)
-                {
+                let glass_split = estimate
+                    .echo_split
+                    .as_ref()
+                    .filter(|_| !estimate.is_mirror());
+                if let (Some(map), Some(split)) = (through.as_deref_mut(), glass_split) {
                     for surface in strengths.surfaces(split, voxel).into_iter().flatten() {
                         map.add_beam(&surface, &surface, 0.0, true);
                     }
